@@ -1,0 +1,73 @@
+#pragma once
+/// The cubic cells of the paper's "box" algorithm, shared by both engines.
+///
+/// The grid lives in the lab frame. In x and y it covers the cylinder's square
+/// bounding box; in z it is periodic, with a period two cells longer than the cavity, so
+/// it never needs rebuilding as the host moves, and spheres inside the cavity are in
+/// neighbouring cells only when they are really within one cell of each other.
+/// Cells are at least as large as the largest sphere, so a sphere can only touch spheres
+/// whose centres lie in its own cell or the 26 around it.
+
+#include <Eigen/Core>
+#include <array>
+#include <span>
+#include <vector>
+
+namespace pdamp {
+
+struct CellCoord {
+  int ix, iy;
+  int iz;  ///< unwrapped: floor(z / cell size), any integer
+};
+
+class CellGrid {
+ public:
+  /// `min_cell_size_m` must be ≥ the largest sphere diameter; the cells are stretched
+  /// to tile the cavity's cross-section exactly.
+  CellGrid(double cavity_radius_m, double cavity_height_m, double min_cell_size_m);
+
+  double cell_size_m() const { return cell_m_; }
+  int nx() const { return n_xy_; }
+  int ny() const { return n_xy_; }
+  int nz() const { return n_z_; }
+  int cell_count() const { return n_xy_ * n_xy_ * n_z_; }
+
+  CellCoord coord_of(const Eigen::Vector3d& p) const;
+  int index(const CellCoord& c) const;
+  int cell_of(const Eigen::Vector3d& p) const { return index(coord_of(p)); }
+
+  /// The distinct cells within one cell of `c` (itself included); returns how many.
+  int neighbours(const CellCoord& c, std::array<int, 27>& out) const;
+
+  /// Lab-frame faces of a cell: x ∈ [x_lower(ix), x_lower(ix + 1)), likewise y and z.
+  /// The outermost x and y cells extend to infinity (spheres may overlap the side wall).
+  double x_lower_m(int ix) const { return -half_width_m_ + ix * cell_m_; }
+  double z_lower_m(int iz) const { return iz * cell_m_; }
+
+ private:
+  int clamp_xy(double coordinate) const;
+
+  double half_width_m_;
+  double cell_m_;
+  int n_xy_;
+  int n_z_;
+};
+
+/// Particles binned by cell with a counting sort: the particles of cell c are
+/// `particles_in(c)`. Rebuilding reuses the arrays, so it does not allocate once warm.
+class CellList {
+ public:
+  void build(const CellGrid& grid, const Eigen::Matrix3Xd& positions);
+  std::span<const int> particles_in(int cell) const {
+    return {order_.data() + start_[cell], static_cast<std::size_t>(start_[cell + 1] - start_[cell])};
+  }
+  int cell_of_particle(int i) const { return cell_of_[i]; }
+
+ private:
+  std::vector<int> start_;    ///< size cell_count + 1
+  std::vector<int> order_;    ///< particle indices grouped by cell
+  std::vector<int> cell_of_;  ///< cell of each particle
+  std::vector<int> scratch_;  ///< fill cursors of the counting sort
+};
+
+}  // namespace pdamp

@@ -1,0 +1,105 @@
+#pragma once
+/// The validated settings of one damper simulation. Both engines take a `Scenario`
+/// and nothing else; `load_scenario` (scenario_loader.hpp) is the only way to build
+/// one from user input, and it checks every value before anything runs.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace pdamp {
+
+/// Single-degree-of-freedom host: M z'' + C z' + K z = F_excitation(t) + F_particles.
+/// z is the vertical displacement (m) of the cavity from the static equilibrium of the
+/// host alone (the spring preload carries the host's own weight; the particles' weight
+/// reaches the host through contacts).
+struct HostSettings {
+  double mass_kg = 0.0376;
+  double stiffness_N_m = 470.0;
+  double damping_N_s_m = 0.1;
+  double z0_m = 0.0157;   ///< initial displacement
+  double v0_m_s = 0.0;    ///< initial velocity
+};
+
+enum class ExcitationMode {
+  free_decay,         ///< no excitation
+  base_motion,        ///< the spring and damper are anchored to a base y(t) = A sin(ωt + φ)
+  force,              ///< F(t) = F0 sin(ωt + φ) acts on the host
+  prescribed_motion,  ///< z(t) = A sin(ωt + φ), infinite host mass (K, C, z0, v0 unused)
+};
+
+struct ExcitationSettings {
+  ExcitationMode mode = ExcitationMode::free_decay;
+  double amplitude_m = 0.0;  ///< base or prescribed motion amplitude
+  double force_N = 0.0;      ///< force amplitude
+  double frequency_hz = 0.0;
+  double phase_rad = 0.0;
+  double angular_frequency_rad_s() const;
+};
+
+/// Vertical closed cylinder cut into the host: side wall, bottom cap at the host's z,
+/// top cap at z + height. Its axis is the lab z axis through x = y = 0.
+struct CavitySettings {
+  double diameter_m = 0.0254;
+  double height_m = 0.00704;
+  double radius_m() const { return 0.5 * diameter_m; }
+};
+
+struct ParticleSettings {
+  int count = 1246;
+  double diameter_min_m = 0.00088;  ///< equal to diameter_max_m for a monodisperse fill
+  double diameter_max_m = 0.00088;
+  double density_kg_m3 = 9000.0;
+  std::uint64_t seed = 1;
+};
+
+/// Hertz normal law with a constant dashpot, incremental tangential spring with Coulomb cap:
+/// f_n = kn δ^{3/2} + cn δ', f_s = ks δ_s + cs δ_s' (|f_s| ≤ μ f_n).
+struct SoftContactLaw {
+  double kn_N_m1_5 = 3.6e5;  ///< N/m^1.5
+  double cn_N_s_m = 0.01;
+  double ks_N_m = 3.3e5;
+  double cs_N_s_m = 0.015;
+  double mu = 0.55;
+};
+
+/// Walton's three-parameter impulse law: normal restitution, Coulomb friction and
+/// tangential restitution of sticking collisions.
+/// The defaults are the Table 1 soft law's restitution at a 0.5 m/s impact
+/// (0.71 sphere–sphere; the wall default is set in scenario_loader.cpp).
+struct HardContactLaw {
+  double en = 0.71;
+  double mu = 0.55;
+  double beta0 = 0.35;  ///< Walton's typical value for metal spheres
+};
+
+struct RunSettings {
+  double duration_s = 1.5;
+  double sample_interval_s = 1e-3;
+  std::optional<double> dt_s;  ///< soft engine time step; empty = automatic
+};
+
+struct Scenario {
+  std::string name;  ///< the scenario file's stem unless set in the file
+  HostSettings host;
+  ExcitationSettings excitation;
+  CavitySettings cavity;
+  Eigen::Vector3d gravity_m_s2{0.0, 0.0, -9.81};
+  ParticleSettings particles;
+  SoftContactLaw soft_particle;  ///< particle–particle
+  SoftContactLaw soft_wall;      ///< particle–wall (defaults to the particle–particle law)
+  HardContactLaw hard_particle;
+  HardContactLaw hard_wall;
+  RunSettings run;
+
+  /// Every key with its resolved value, in scenario-file syntax. Loading this text
+  /// gives back an identical scenario; the store keeps it with each run.
+  std::string canonical_text;
+
+  bool host_has_infinite_mass() const {
+    return excitation.mode == ExcitationMode::prescribed_motion;
+  }
+};
+
+}  // namespace pdamp

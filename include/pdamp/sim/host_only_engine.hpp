@@ -1,0 +1,28 @@
+#pragma once
+/// The host without particles, advanced on its exact solution. Both models run it when
+/// a scenario has no particles; it is the reference the engines' host coupling is
+/// tested against.
+
+#include "pdamp/model/host.hpp"
+#include "pdamp/sim/engine.hpp"
+
+namespace pdamp {
+
+class HostOnlyEngine final : public Engine {
+ public:
+  explicit HostOnlyEngine(const Scenario& scenario);
+
+  void advance_to(double t_s) override;
+  Observation observe() const override;
+  State state() const override;
+  double time_step_s() const override { return 0.0; }
+
+ private:
+  HostModel model_;
+  HostTrajectory trajectory_;
+  double t_s_ = 0.0;
+  double viscous_J_ = 0.0;
+  double excitation_J_ = 0.0;
+};
+
+}  // namespace pdamp

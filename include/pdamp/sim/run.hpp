@@ -1,0 +1,43 @@
+#pragma once
+/// The run loop: advances an engine over the scenario's duration, feeds the cycle
+/// analysis, records samples and cycles, and stops cleanly when asked.
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <string_view>
+
+#include "pdamp/sim/engine.hpp"
+#include "pdamp/sim/recorder.hpp"
+
+namespace pdamp {
+
+enum class RunStatus { running, completed, failed, interrupted };
+std::string_view to_string(RunStatus status);
+
+struct RunControl {
+  const std::atomic<bool>* stop = nullptr;  ///< when it becomes true the run ends as interrupted
+  std::function<void(double t_s)> progress;  ///< called about twice a second of wall time
+};
+
+struct RunOutcome {
+  RunStatus status = RunStatus::completed;
+  std::string message;
+  double sim_time_s = 0.0;
+  double wall_time_s = 0.0;
+  double initial_energy_J = 0.0;
+  double max_energy_balance_rel_err = 0.0;
+  int samples = 0;
+  int cycles = 0;
+};
+
+/// Runs `engine` from its current time to scenario.run.duration_s. An exception inside
+/// the engine ends the run as failed with its message; what was recorded stays.
+RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
+                          const RunControl& control = {});
+
+/// How often the run loop observes the engine (s): ≥ 256 times per natural period of
+/// the host (or of the excitation, if faster), and at every sample.
+double observation_interval_s(const Scenario& scenario);
+
+}  // namespace pdamp

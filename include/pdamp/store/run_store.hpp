@@ -1,0 +1,96 @@
+#pragma once
+/// The run store: one SQLite file holding many runs. The tables and views below are
+/// pdamp's public SQL interface (documented in the README); the schema is versioned with
+/// PRAGMA user_version and migrated forward on open.
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "pdamp/sim/recorder.hpp"
+#include "pdamp/sim/run.hpp"
+#include "pdamp/store/sqlite.hpp"
+
+namespace pdamp {
+
+struct NewRun {
+  std::string model;  ///< "soft" or "hard"
+  std::string scenario_name;
+  std::string scenario_text;  ///< the canonical scenario: every key, resolved
+  std::uint64_t seed = 0;
+  int n_particles = 0;
+  double duration_s = 0.0;
+  std::optional<double> dt_s;  ///< time step of a time-stepped engine
+};
+
+struct RunEnd {
+  RunStatus status = RunStatus::completed;
+  std::string message;
+  double sim_time_s = 0.0;
+  double wall_time_s = 0.0;
+  double initial_energy_J = 0.0;
+  double energy_balance_rel_err = 0.0;  ///< the largest over the run
+};
+
+/// One row of the `run_summary` view.
+struct RunSummary {
+  std::int64_t run_id = 0;
+  std::string model, scenario_name, status, message, started_at;
+  int n_particles = 0;
+  double duration_s = 0.0, sim_time_s = 0.0;
+  std::optional<double> wall_time_s, energy_balance_rel_err;
+  std::int64_t n_samples = 0, n_cycles = 0;
+  std::optional<double> dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J;
+};
+
+class RunStore {
+ public:
+  /// Opens or creates the store and migrates it to the current schema. Throws
+  /// InputError for a file that is not a pdamp store or was written by a newer pdamp.
+  explicit RunStore(const std::filesystem::path& file);
+
+  static int schema_version();
+
+  std::int64_t begin_run(const NewRun& run);
+  void finish_run(std::int64_t run_id, const RunEnd& end);
+
+  std::vector<RunSummary> list_runs();
+  std::optional<RunSummary> summary(std::int64_t run_id);
+
+  sqlite::Database& database() { return db_; }
+
+ private:
+  void migrate();
+  sqlite::Database db_;
+};
+
+/// Streams one run's samples and cycles into the store in batched transactions,
+/// committed at least every `commit_interval` of wall time, so a killed run keeps all
+/// but the last moments.
+class RunWriter final : public RunRecorder {
+ public:
+  RunWriter(RunStore& store, std::int64_t run_id,
+            std::chrono::milliseconds commit_interval = std::chrono::milliseconds(250));
+  ~RunWriter() override;
+
+  void record_sample(const Observation& sample, double energy_balance_rel_err) override;
+  void record_cycle(const CycleRecord& cycle) override;
+  void flush() override;
+
+ private:
+  void begin_batch();
+  void commit_if_due();
+
+  RunStore* store_;
+  std::int64_t run_id_;
+  std::chrono::milliseconds commit_interval_;
+  std::chrono::steady_clock::time_point batch_started_;
+  bool in_batch_ = false;
+  sqlite::Statement insert_sample_;
+  sqlite::Statement insert_cycle_;
+};
+
+}  // namespace pdamp

@@ -1,0 +1,154 @@
+#include "commands.hpp"
+
+#include <atomic>
+#include <charconv>
+#include <csignal>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "pdamp/errors.hpp"
+#include "pdamp/model/placement.hpp"
+#include "pdamp/sim/run.hpp"
+#include "pdamp/store/run_store.hpp"
+
+namespace pdamp {
+namespace {
+
+std::atomic<int> stop_signal{0};
+std::atomic<bool> stop_requested{false};
+
+extern "C" void request_stop(int signal_number) {
+  stop_signal.store(signal_number);
+  stop_requested.store(true);
+}
+
+/// SIGINT and SIGTERM end a run cleanly: it keeps what it computed and is marked
+/// interrupted. A second signal does the same (the run loop checks often).
+void install_stop_handlers() {
+  struct sigaction action {};
+  action.sa_handler = request_stop;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+void require_existing(const std::filesystem::path& db) {
+  if (!std::filesystem::exists(db)) {
+    throw InputError("database '" + db.string() + "' does not exist (give the file a run was stored in with --db)");
+  }
+}
+
+std::string format_optional(const std::optional<double>& value, int precision = 4) {
+  if (!value) return "-";
+  std::ostringstream out;
+  out << std::setprecision(precision) << *value;
+  return out.str();
+}
+
+void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
+  const auto s = store.summary(run_id);
+  if (!s) throw InputError("run " + std::to_string(run_id) + " is not in '" + store.database().file().string() + "'");
+  out << "run " << s->run_id << ": " << s->model << " model, scenario '" << s->scenario_name << "', " << s->status;
+  if (!s->message.empty()) out << " (" << s->message << ")";
+  out << "\n  particles               " << s->n_particles << "\n  simulated               " << s->sim_time_s
+      << " s of " << s->duration_s << " s\n  wall time               " << format_optional(s->wall_time_s) << " s"
+      << "\n  energy balance error    " << format_optional(s->energy_balance_rel_err, 3) << " (max relative)"
+      << "\n  dissipated impact       " << format_optional(s->dissipated_impact_J) << " J"
+      << "\n  dissipated friction     " << format_optional(s->dissipated_friction_J) << " J"
+      << "\n  dissipated viscous      " << format_optional(s->dissipated_viscous_J) << " J"
+      << "\n  samples, cycles         " << s->n_samples << ", " << s->n_cycles << "\n";
+  if (s->n_cycles == 0) return;
+  sqlite::Statement cycles(store.database(),
+                           "SELECT (SELECT freq_hz FROM cycles WHERE run_id = ?1 ORDER BY cycle LIMIT 1), "
+                           "(SELECT freq_hz FROM cycles WHERE run_id = ?1 ORDER BY cycle DESC LIMIT 1), "
+                           "psi, gamma, cycle FROM cycles WHERE run_id = ?1 ORDER BY psi DESC LIMIT 1");
+  cycles.bind(1, run_id);
+  if (cycles.step()) {
+    out << "  frequency               " << format_optional(cycles.column_double(0)) << " Hz (first cycle), "
+        << format_optional(cycles.column_double(1)) << " Hz (last)\n  psi peak                " << std::setprecision(4)
+        << cycles.column_double(2) << " in cycle " << cycles.column_int(4) << " (Gamma "
+        << format_optional(cycles.column_optional_double(3)) << ")\n";
+  }
+}
+
+}  // namespace
+
+int run_command(const ScenarioRequest& request, const std::string& model_name, const std::filesystem::path& db,
+                bool show_progress) {
+  // Everything that can be wrong with the input is found before the store is touched.
+  const Model model = parse_model(model_name);
+  const Scenario scenario = load_scenario(request.file, request.overrides);
+  const Particles initial = place_particles(scenario.particles, scenario.cavity, scenario.host.z0_m);
+  auto engine = make_engine(model, scenario, initial);
+
+  RunStore store(db);
+  const std::int64_t run_id = store.begin_run({std::string(to_string(model)), scenario.name, scenario.canonical_text,
+                                               scenario.particles.seed, scenario.particles.count,
+                                               scenario.run.duration_s,
+                                               engine->time_step_s() > 0 ? std::optional(engine->time_step_s())
+                                                                         : std::nullopt});
+  install_stop_handlers();
+  RunControl control;
+  control.stop = &stop_requested;
+  if (show_progress) {
+    control.progress = [&](double t) {
+      std::fprintf(stderr, "\r  run %lld: t = %.4f of %.4f s", static_cast<long long>(run_id), t,
+                   scenario.run.duration_s);
+      std::fflush(stderr);
+    };
+  }
+  RunOutcome outcome;
+  {
+    RunWriter writer(store, run_id);
+    outcome = run_simulation(*engine, scenario, writer, control);
+  }
+  if (show_progress) std::fputs("\n", stderr);
+  store.finish_run(run_id, {outcome.status, outcome.message, outcome.sim_time_s, outcome.wall_time_s,
+                            outcome.initial_energy_J, outcome.max_energy_balance_rel_err});
+  print_summary(store, run_id, std::cout);
+  switch (outcome.status) {
+    case RunStatus::completed: return 0;
+    case RunStatus::interrupted: return 128 + stop_signal.load();
+    default: break;
+  }
+  std::cerr << "pdamp: run " << run_id << " failed: " << outcome.message << "\n";
+  return 1;
+}
+
+int list_runs_command(const std::filesystem::path& db) {
+  require_existing(db);
+  RunStore store(db);
+  std::cout << std::left << std::setw(7) << "run_id" << std::setw(6) << "model" << std::setw(24) << "scenario"
+            << std::setw(12) << "status" << std::right << std::setw(10) << "particles" << std::setw(11) << "sim_s"
+            << std::setw(11) << "wall_s" << std::setw(11) << "balance" << std::setw(8) << "cycles" << "\n";
+  for (const auto& s : store.list_runs()) {
+    std::cout << std::left << std::setw(7) << s.run_id << std::setw(6) << s.model << std::setw(24) << s.scenario_name
+              << std::setw(12) << s.status << std::right << std::setw(10) << s.n_particles << std::setw(11)
+              << std::setprecision(4) << s.sim_time_s << std::setw(11) << format_optional(s.wall_time_s)
+              << std::setw(11) << format_optional(s.energy_balance_rel_err, 2) << std::setw(8) << s.n_cycles << "\n";
+  }
+  return 0;
+}
+
+int show_run_command(const std::string& run_id_text, const std::filesystem::path& db) {
+  std::int64_t run_id = 0;
+  const char* end = run_id_text.data() + run_id_text.size();
+  if (auto [ptr, ec] = std::from_chars(run_id_text.data(), end, run_id); ec != std::errc() || ptr != end || run_id < 1) {
+    throw InputError("RUN_ID '" + run_id_text + "' must be a positive whole number (see 'pdamp runs')");
+  }
+  require_existing(db);
+  RunStore store(db);
+  print_summary(store, run_id, std::cout);
+  return 0;
+}
+
+int check_command(const ScenarioRequest& request) {
+  const Scenario scenario = load_scenario(request.file, request.overrides);
+  std::cout << "# scenario '" << scenario.name << "' is valid; every key with its resolved value:\n"
+            << scenario.canonical_text;
+  return 0;
+}
+
+}  // namespace pdamp

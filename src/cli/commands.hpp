@@ -1,0 +1,22 @@
+#pragma once
+/// The CLI's commands, each returning the process exit code.
+
+#include <filesystem>
+#include <string>
+
+#include "pdamp/scenario/scenario_loader.hpp"
+
+namespace pdamp {
+
+struct ScenarioRequest {
+  std::filesystem::path file;
+  ScenarioOverrides overrides;
+};
+
+int run_command(const ScenarioRequest& request, const std::string& model, const std::filesystem::path& db,
+                bool show_progress);
+int list_runs_command(const std::filesystem::path& db);
+int show_run_command(const std::string& run_id, const std::filesystem::path& db);
+int check_command(const ScenarioRequest& request);
+
+}  // namespace pdamp

@@ -1,0 +1,157 @@
+/// pdamp command line: run a scenario on either engine, list and show stored runs.
+/// Exit codes: 0 success, 1 runtime failure, 2 usage or input error, 128 + signal when
+/// a run was interrupted (its results are kept and marked interrupted).
+
+#include <unistd.h>
+
+#include <boost/program_options.hpp>
+#include <csignal>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "pdamp/errors.hpp"
+#include "pdamp/version.hpp"
+
+namespace po = boost::program_options;
+using namespace pdamp;
+
+namespace {
+
+constexpr const char* usage =
+    "usage: pdamp <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  run     --scenario FILE --model soft|hard [--set k=v ...] [--db FILE] [--duration S]\n"
+    "          simulate a scenario and store the run\n"
+    "  runs    [--db FILE]            list the stored runs\n"
+    "  show    RUN_ID [--db FILE]     summary of one run\n"
+    "  check   --scenario FILE [--set k=v ...]\n"
+    "          validate a scenario and print every key with its resolved value\n"
+    "  keys    list every scenario key with its unit, default and meaning\n"
+    "\n"
+    "  pdamp <command> --help   options of a command\n"
+    "  pdamp --version\n"
+    "\n"
+    "The default database is ./pdamp.sqlite (an embedded SQLite file).\n";
+
+po::options_description scenario_options() {
+  po::options_description o("scenario");
+  o.add_options()("scenario", po::value<std::string>(), "scenario file (INI syntax; see data/scenarios/)")(
+      "set", po::value<std::vector<std::string>>()->composing(),
+      "override a scenario key: --set section.key=value (repeatable)");
+  return o;
+}
+
+po::options_description db_option() {
+  po::options_description o("store");
+  o.add_options()("db", po::value<std::string>()->default_value("pdamp.sqlite"), "SQLite run store file");
+  return o;
+}
+
+po::variables_map parse(const std::vector<std::string>& args, const po::options_description& options,
+                        const po::positional_options_description& positional = {}) {
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(args).options(options).positional(positional).run(), vm);
+    po::notify(vm);
+  } catch (const po::error& e) {
+    throw InputError(std::string(e.what()));
+  }
+  return vm;
+}
+
+std::string required(const po::variables_map& vm, const std::string& name, const std::string& command) {
+  if (!vm.count(name)) throw InputError("pdamp " + command + ": --" + name + " is required");
+  return vm[name].as<std::string>();
+}
+
+ScenarioRequest scenario_request(const po::variables_map& vm, const std::string& command) {
+  ScenarioRequest request;
+  request.file = required(vm, "scenario", command);
+  if (vm.count("set")) request.overrides = vm["set"].as<std::vector<std::string>>();
+  return request;
+}
+
+int dispatch(const std::string& command, const std::vector<std::string>& args) {
+  po::options_description help("general");
+  help.add_options()("help,h", "show this help");
+
+  if (command == "run") {
+    po::options_description options("pdamp run --scenario FILE --model soft|hard [options]");
+    options.add(help).add(scenario_options()).add(db_option());
+    options.add_options()("model", po::value<std::string>(), "soft (Hertz DEM) or hard (event-driven)")(
+        "duration", po::value<std::string>(), "simulated time in s (same as --set run.duration_s=S)");
+    const auto vm = parse(args, options);
+    if (vm.count("help")) {
+      std::cout << options << "\n";
+      describe_scenario_keys(std::cout);
+      return 0;
+    }
+    ScenarioRequest request = scenario_request(vm, command);
+    if (vm.count("duration")) request.overrides.push_back("run.duration_s=" + vm["duration"].as<std::string>());
+    return run_command(request, required(vm, "model", command), vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0);
+  }
+  if (command == "runs") {
+    po::options_description options("pdamp runs [--db FILE]");
+    options.add(help).add(db_option());
+    const auto vm = parse(args, options);
+    if (vm.count("help")) {
+      std::cout << options << "\n";
+      return 0;
+    }
+    return list_runs_command(vm["db"].as<std::string>());
+  }
+  if (command == "show") {
+    po::options_description options("pdamp show RUN_ID [--db FILE]");
+    options.add(help).add(db_option());
+    options.add_options()("run-id", po::value<std::string>(), "run to show");
+    po::positional_options_description positional;
+    positional.add("run-id", 1);
+    const auto vm = parse(args, options, positional);
+    if (vm.count("help")) {
+      std::cout << options << "\n";
+      return 0;
+    }
+    return show_run_command(required(vm, "run-id", command), vm["db"].as<std::string>());
+  }
+  if (command == "check") {
+    po::options_description options("pdamp check --scenario FILE [--set k=v ...]");
+    options.add(help).add(scenario_options());
+    const auto vm = parse(args, options);
+    if (vm.count("help")) {
+      std::cout << options << "\n";
+      return 0;
+    }
+    return check_command(scenario_request(vm, command));
+  }
+  if (command == "keys") {
+    describe_scenario_keys(std::cout);
+    return 0;
+  }
+  throw InputError("unknown command '" + command + "'\n\n" + usage);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const std::vector<std::string> all(argv + 1, argv + argc);
+  if (all.empty() || all[0] == "--help" || all[0] == "-h" || all[0] == "help") {
+    std::cout << usage;
+    return all.empty() ? 2 : 0;
+  }
+  if (all[0] == "--version") {
+    std::cout << "pdamp " << version_string << "\n";
+    return 0;
+  }
+  try {
+    return dispatch(all[0], {all.begin() + 1, all.end()});
+  } catch (const InputError& e) {
+    std::cerr << "pdamp: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "pdamp: error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,23 @@
+#include "pdamp/sim/engine.hpp"
+
+#include "pdamp/errors.hpp"
+#include "pdamp/sim/host_only_engine.hpp"
+
+namespace pdamp {
+
+std::string_view to_string(Model model) { return model == Model::soft ? "soft" : "hard"; }
+
+Model parse_model(std::string_view text) {
+  if (text == "soft") return Model::soft;
+  if (text == "hard") return Model::hard;
+  throw InputError("--model '" + std::string(text) +
+                   "': must be 'soft' (time-stepped Hertz DEM) or 'hard' (event-driven hard spheres)");
+}
+
+std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial) {
+  if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
+  throw InputError("the " + std::string(to_string(model)) +
+                   " engine is not built yet: only particles.count = 0 (the host alone) runs for now");
+}
+
+}  // namespace pdamp

@@ -1,0 +1,28 @@
+#include "pdamp/sim/host_only_engine.hpp"
+
+namespace pdamp {
+
+HostOnlyEngine::HostOnlyEngine(const Scenario& scenario)
+    : model_(scenario), trajectory_(model_, 0.0, model_.initial_state()) {}
+
+void HostOnlyEngine::advance_to(double t_s) {
+  viscous_J_ += trajectory_.viscous_dissipation_J(t_s_, t_s);
+  excitation_J_ += trajectory_.excitation_work_J(t_s_, t_s);
+  t_s_ = t_s;
+}
+
+Observation HostOnlyEngine::observe() const {
+  Observation o;
+  o.t_s = t_s_;
+  o.host = trajectory_.at(t_s_);
+  o.energy.host_counts = !model_.has_infinite_mass();
+  o.energy.host_kinetic_J = 0.5 * model_.mass_kg() * o.host.v_m_s * o.host.v_m_s;
+  o.energy.spring_potential_J = model_.spring_energy_J(t_s_, o.host.z_m);
+  o.energy.dissipated_viscous_J = viscous_J_;
+  o.energy.excitation_work_J = excitation_J_;
+  return o;
+}
+
+State HostOnlyEngine::state() const { return {observe(), Particles(0)}; }
+
+}  // namespace pdamp

@@ -1,0 +1,104 @@
+#include "pdamp/sim/run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <numbers>
+
+#include "pdamp/analysis/cycle_analyzer.hpp"
+
+namespace pdamp {
+
+std::string_view to_string(RunStatus status) {
+  switch (status) {
+    case RunStatus::running: return "running";
+    case RunStatus::completed: return "completed";
+    case RunStatus::failed: return "failed";
+    case RunStatus::interrupted: break;
+  }
+  return "interrupted";
+}
+
+double observation_interval_s(const Scenario& scenario) {
+  double fastest = scenario.excitation.angular_frequency_rad_s();
+  if (!scenario.host_has_infinite_mass()) {
+    fastest = std::max(fastest, std::sqrt(scenario.host.stiffness_N_m / scenario.host.mass_kg));
+  }
+  return std::min(scenario.run.sample_interval_s, 2.0 * std::numbers::pi / fastest / 256.0);
+}
+
+namespace {
+
+/// The analysis of cycles needs the host's equilibrium with the bed resting in it.
+CycleAnalyzer make_cycle_analyzer(const Scenario& scenario, const State& start) {
+  const double g_z = scenario.gravity_m_s2.z();
+  const double equilibrium_z =
+      scenario.host_has_infinite_mass() ? 0.0 : start.particles.total_mass_kg() * g_z / scenario.host.stiffness_N_m;
+  return CycleAnalyzer(scenario.host.mass_kg, equilibrium_z, std::abs(g_z));
+}
+
+}  // namespace
+
+RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
+                          const RunControl& control) {
+  using clock = std::chrono::steady_clock;
+  const auto wall_start = clock::now();
+  auto next_progress = wall_start;
+  RunOutcome outcome;
+  const double duration = scenario.run.duration_s;
+  const double sample_interval = scenario.run.sample_interval_s;
+  // Observation times are j·h inside each sample interval k·Δ, computed from integers so
+  // that samples fall exactly on multiples of Δ.
+  const auto observations_per_sample =
+      static_cast<long>(std::ceil(sample_interval / observation_interval_s(scenario) - 1e-9));
+  const double h = sample_interval / static_cast<double>(observations_per_sample);
+
+  try {
+    CycleAnalyzer cycles = make_cycle_analyzer(scenario, engine.state());
+    Observation now = engine.observe();
+    outcome.initial_energy_J = now.energy.stored_J();
+    auto record = [&](bool is_sample) {
+      const double error = now.energy.balance_relative_error(outcome.initial_energy_J);
+      outcome.max_energy_balance_rel_err = std::max(outcome.max_energy_balance_rel_err, error);
+      if (const auto cycle = cycles.feed(now)) {
+        recorder.record_cycle(*cycle);
+        ++outcome.cycles;
+      }
+      if (is_sample) {
+        recorder.record_sample(now, error);
+        ++outcome.samples;
+      }
+      outcome.sim_time_s = now.t_s;
+    };
+    record(true);
+    for (long k = 0; now.t_s < duration; ++k) {
+      for (long j = 1; j <= observations_per_sample && now.t_s < duration; ++j) {
+        const double t = j == observations_per_sample ? static_cast<double>(k + 1) * sample_interval
+                                                      : static_cast<double>(k) * sample_interval + static_cast<double>(j) * h;
+        const double target = std::min(t, duration);
+        engine.advance_to(target);
+        now = engine.observe();
+        record(j == observations_per_sample || target == duration);
+        if (control.stop && control.stop->load()) {
+          outcome.status = RunStatus::interrupted;
+          outcome.message = "stopped by a signal at t = " + std::to_string(now.t_s) + " s";
+          break;
+        }
+        if (control.progress && clock::now() >= next_progress) {
+          control.progress(now.t_s);
+          next_progress = clock::now() + std::chrono::milliseconds(500);
+        }
+      }
+      if (outcome.status == RunStatus::interrupted) break;
+    }
+  } catch (const std::exception& e) {
+    outcome.status = RunStatus::failed;
+    outcome.message = e.what();
+  }
+  recorder.flush();
+  outcome.wall_time_s = std::chrono::duration<double>(clock::now() - wall_start).count();
+  return outcome;
+}
+
+}  // namespace pdamp

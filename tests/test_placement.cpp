@@ -1,0 +1,59 @@
+#include <doctest/doctest.h>
+
+#include "pdamp/errors.hpp"
+#include "pdamp/model/cavity.hpp"
+#include "pdamp/model/placement.hpp"
+
+using namespace pdamp;
+
+namespace {
+
+void check_valid(const Particles& p, const CavitySettings& cavity_settings, double host_z) {
+  const Cavity cavity(cavity_settings);
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    REQUIRE(cavity.clearance_m(p.position_m.col(i), p.radius_m[i], host_z) >= 0.0);
+    for (Eigen::Index j = i + 1; j < p.size(); ++j) {
+      REQUIRE((p.position_m.col(i) - p.position_m.col(j)).norm() >= p.radius_m[i] + p.radius_m[j]);
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("placement: Table 1 fill, inside the cavity, no overlaps, reproducible") {
+  const ParticleSettings settings{1246, 0.00088, 0.00088, 9000, 42};
+  const CavitySettings cavity{0.0254, 0.00704};
+  const Particles a = place_particles(settings, cavity, 0.0157);
+  CHECK(a.size() == 1246);
+  check_valid(a, cavity, 0.0157);
+  CHECK(a.total_mass_kg() == doctest::Approx(1246 * 9000 * 3.14159265358979 / 6 * 0.00088 * 0.00088 * 0.00088));
+  CHECK(a.velocity_m_s.isZero());
+  const Particles again = place_particles(settings, cavity, 0.0157);
+  CHECK(again.position_m == a.position_m);
+  ParticleSettings other = settings;
+  other.seed = 43;
+  CHECK(place_particles(other, cavity, 0.0157).position_m != a.position_m);
+}
+
+TEST_CASE("placement: dense Table 4 fill (37 % solid) and polydisperse spheres") {
+  const CavitySettings cavity{0.01, 0.012};
+  const Particles dense = place_particles({386, 0.0012, 0.0012, 3840, 1}, cavity, 0.0);
+  check_valid(dense, cavity, 0.0);
+  const Particles mixed = place_particles({300, 0.0008, 0.0012, 3840, 5}, cavity, -0.002);
+  check_valid(mixed, cavity, -0.002);
+  CHECK(mixed.radius_m.minCoeff() < mixed.radius_m.maxCoeff());
+}
+
+TEST_CASE("placement: too many spheres is an input error that says how many fit") {
+  const CavitySettings cavity{0.01, 0.012};
+  const int capacity = max_particles_that_fit(cavity, 0.0012);
+  CHECK(capacity >= 386);
+  CHECK_NOTHROW(place_particles({capacity, 0.0012, 0.0012, 3840, 1}, cavity, 0.0));
+  try {
+    place_particles({capacity + 1, 0.0012, 0.0012, 3840, 1}, cavity, 0.0);
+    FAIL("expected InputError");
+  } catch (const InputError& e) {
+    CHECK(std::string(e.what()).find("at most " + std::to_string(capacity)) != std::string::npos);
+  }
+  CHECK(place_particles({0, 0.0012, 0.0012, 3840, 1}, cavity, 0.0).size() == 0);
+}

@@ -1,0 +1,152 @@
+#include <doctest/doctest.h>
+
+#include "pdamp/errors.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using pdamp::test::scenario_from;
+
+namespace {
+
+/// The message of the InputError that loading `text` throws ("" if none).
+std::string input_error(const std::string& text, const ScenarioOverrides& overrides = {}) {
+  try {
+    scenario_from(text, overrides);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool contains(const std::string& haystack, const std::string& needle) {
+  return haystack.find(needle) != std::string::npos;
+}
+
+}  // namespace
+
+TEST_CASE("an empty scenario is the paper's Table 1 case") {
+  const Scenario s = scenario_from("");
+  CHECK(s.host.mass_kg == 0.0376);
+  CHECK(s.host.stiffness_N_m == 470.0);
+  CHECK(s.host.damping_N_s_m == 0.1);
+  CHECK(s.host.z0_m == 0.0157);
+  CHECK(s.cavity.diameter_m == 0.0254);
+  CHECK(s.cavity.height_m == 0.00704);
+  CHECK(s.particles.count == 1246);
+  CHECK(s.particles.diameter_min_m == 0.00088);
+  CHECK(s.soft_particle.kn_N_m1_5 == 3.6e5);
+  CHECK(s.soft_wall.kn_N_m1_5 == 3.6e5);
+  CHECK(s.gravity_m_s2.z() == -9.81);
+  CHECK(s.excitation.mode == ExcitationMode::free_decay);
+  CHECK_FALSE(s.run.dt_s.has_value());
+}
+
+TEST_CASE("sections, comments, overrides and inherited wall laws") {
+  const Scenario s = scenario_from(
+      "# a comment\n[host]\nmass_kg = 0.05   # inline comment\n[soft]\nmu = 0.3\nkn_N_m1_5 = 2e5\n"
+      "[soft_wall]\nkn_N_m1_5 = 4e5\n",
+      {"host.mass_kg=0.06", "run.dt_s=2.5e-6"});
+  CHECK(s.host.mass_kg == 0.06);  // the command line wins over the file
+  CHECK(s.soft_particle.mu == 0.3);
+  CHECK(s.soft_wall.mu == 0.3);  // not given for the wall: inherits the sphere-sphere value
+  CHECK(s.soft_particle.kn_N_m1_5 == 2e5);
+  CHECK(s.soft_wall.kn_N_m1_5 == 4e5);
+  REQUIRE(s.run.dt_s.has_value());
+  CHECK(*s.run.dt_s == 2.5e-6);
+}
+
+TEST_CASE("gravity as a magnitude or a vector, diameters as a value or a range") {
+  CHECK(scenario_from("[gravity]\ng_m_s2 = 0\n").gravity_m_s2.norm() == 0.0);
+  const Scenario tilted = scenario_from("[gravity]\ng_m_s2 = 1 0 -9\n");
+  CHECK(tilted.gravity_m_s2.x() == 1.0);
+  CHECK(tilted.gravity_m_s2.z() == -9.0);
+  const Scenario range = scenario_from("[particles]\ndiameter_m = 0.0008 0.001\ncount = 100\n");
+  CHECK(range.particles.diameter_min_m == 0.0008);
+  CHECK(range.particles.diameter_max_m == 0.001);
+  CHECK(contains(input_error("[gravity]\ng_m_s2 = -9.81\n"), "gravity.g_m_s2"));
+  CHECK(contains(input_error("[gravity]\ng_m_s2 = 1 2\n"), "three"));
+  CHECK(contains(input_error("[particles]\ndiameter_m = 0.002 0.001\n"), "dmin <= dmax"));
+}
+
+TEST_CASE("bad values are rejected with the key, the value and what is valid") {
+  struct Case {
+    std::string text, key, value, valid;
+  };
+  const Case cases[] = {
+      {"[host]\nmass_kg = -1\n", "host.mass_kg", "'-1'", "> 0"},
+      {"[host]\nmass_kg = 0.03x\n", "host.mass_kg", "'0.03x'", "not a finite number"},
+      {"[host]\nstiffness_N_m = nan\n", "host.stiffness_N_m", "'nan'", "not a finite number"},
+      {"[soft]\nmu = -0.1\n", "soft.mu", "'-0.1'", ">= 0"},
+      {"[hard]\nen = 1.2\n", "hard.en", "'1.2'", "[0, 1]"},
+      {"[hard_wall]\nbeta0 = -2\n", "hard_wall.beta0", "'-2'", "[-1, 1]"},
+      {"[particles]\ncount = 2.5\n", "particles.count", "'2.5'", "whole number"},
+      {"[particles]\nseed = -3\n", "particles.seed", "'-3'", "whole number"},
+      {"[run]\ndt_s = fast\n", "run.dt_s", "'fast'", "'auto'"},
+      {"[run]\nsample_interval_s = 3\n", "run.sample_interval_s", "'3'", "run.duration_s"},
+      {"[excitation]\nmode = shake\n", "excitation.mode", "'shake'", "free, base, force, prescribed"},
+      {"[particles]\ndiameter_m = 0.03\n", "particles.diameter_m", "'0.03'", "do not fit"},
+      {"[particles]\ncount = 100000\n", "particles.count", "'100000'", "at most"},
+  };
+  for (const auto& c : cases) {
+    CAPTURE(c.text);
+    const std::string message = input_error(c.text);
+    CHECK(contains(message, c.key));
+    CHECK(contains(message, c.value));
+    CHECK(contains(message, c.valid));
+  }
+}
+
+TEST_CASE("unknown, duplicated and malformed keys are rejected") {
+  CHECK(contains(input_error("[host]\nmass = 1\n"), "unknown key 'host.mass'"));
+  CHECK(contains(input_error("[host]\nmass_kg = 1\nmass_kg = 2\n"), "more than once"));
+  CHECK(contains(input_error("", {"host.mass_kg"}), "section.key=value"));
+  CHECK(contains(input_error("", {"nokey=3"}), "section.key=value"));
+  CHECK(contains(input_error("", {"host.weight=3"}), "unknown key 'host.weight'"));
+}
+
+TEST_CASE("excitation keys must match the excitation mode") {
+  CHECK(contains(input_error("[excitation]\namplitude_m = 0.001\n"), "excitation.amplitude_m"));
+  CHECK(contains(input_error("[excitation]\nmode = base\nfrequency_hz = 20\n"), "amplitude > 0"));
+  CHECK(contains(input_error("[excitation]\nmode = force\nforce_N = 1\n"), "frequency > 0"));
+  CHECK(contains(input_error("[excitation]\nmode = force\nforce_N = 1\nfrequency_hz = 5\namplitude_m = 0.1\n"),
+                 "use excitation.force_N"));
+  CHECK(contains(input_error("[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 50\n"
+                             "[host]\nz0_m = 0.01\n"),
+                 "host.z0_m"));
+  CHECK(contains(input_error("[host]\ndamping_N_s_m = 0\nmass_kg = 1\nstiffness_N_m = 39.47841760435743\n"
+                             "[excitation]\nmode = force\nforce_N = 1\nfrequency_hz = 1\n"),
+                 "without bound"));
+  const Scenario base = scenario_from("[excitation]\nmode = base\namplitude_m = 0.001\nfrequency_hz = 20\n");
+  CHECK(base.excitation.mode == ExcitationMode::base_motion);
+  CHECK(base.excitation.amplitude_m == 0.001);
+}
+
+TEST_CASE("the canonical text reproduces the scenario") {
+  const Scenario s = scenario_from("[host]\nz0_m = 0.01\n[particles]\ncount = 10\ndiameter_m = 0.001 0.0012\n");
+  const Scenario again = parse_scenario(s.canonical_text, "x", "canonical");
+  CHECK(again.canonical_text == s.canonical_text);
+  CHECK(again.name == s.name);
+  CHECK(again.host.z0_m == 0.01);
+  CHECK(again.particles.diameter_max_m == 0.0012);
+  CHECK(contains(s.canonical_text, "[soft_wall]\nkn_N_m1_5 = 360000"));
+}
+
+TEST_CASE("a missing scenario file is an input error naming the file") {
+  try {
+    load_scenario("/nonexistent/dir/none.ini");
+    FAIL("expected InputError");
+  } catch (const InputError& e) {
+    CHECK(contains(e.what(), "/nonexistent/dir/none.ini"));
+  }
+}
+
+TEST_CASE("every scenario in data/scenarios loads and validates") {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(test::source_dir() / "data" / "scenarios")) {
+    if (entry.path().extension() != ".ini") continue;
+    CAPTURE(entry.path().string());
+    CHECK_NOTHROW(load_scenario(entry.path()));
+    ++count;
+  }
+  CHECK(count >= 10);
+}

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs what pdamp needs to build and test on Debian 12, if it is missing.
+# Idempotent: installs nothing when everything is present. Needs root (or sudo).
+set -euo pipefail
+
+packages=(g++ cmake make libboost-dev libboost-program-options-dev libeigen3-dev libsqlite3-dev doctest-dev sqlite3)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  echo "setup: installing ${missing[*]}" >&2
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}" >/dev/null
+fi

@@ -69,6 +69,12 @@ TEST_CASE("runs, samples and cycles round-trip through the public tables and vie
   CHECK(*summary->wall_time_s == 0.5);
   CHECK(*summary->energy_balance_rel_err == 1e-4);
   CHECK(store.list_runs().size() == 1);
+  store.save_statistics(id, {{"events_wall", 12}, {"events_sphere_sphere", 40}});
+  store.save_statistics(id, {{"events_wall", 13}});
+  const EngineStatistics stats = store.statistics(id);
+  REQUIRE(stats.size() == 2);
+  CHECK(stats[0] == std::pair<std::string, std::int64_t>{"events_sphere_sphere", 40});
+  CHECK(stats[1] == std::pair<std::string, std::int64_t>{"events_wall", 13});
   sqlite::Statement gamma(store.database(), "SELECT gamma IS NULL, seed, dt_s FROM cycles JOIN runs USING (run_id)");
   REQUIRE(gamma.step());
   CHECK(gamma.column_int(0) == 1);
@@ -119,4 +125,22 @@ TEST_CASE("a store written by a newer pdamp, or a foreign database, is refused")
     text << "this is not a database, just some text that is long enough to fill a header page.............\n";
   }
   CHECK_THROWS_AS(RunStore(dir / "text.sqlite"), InputError);
+}
+
+TEST_CASE("an older store is migrated forward and keeps its runs") {
+  test::TempDir dir("store-migrate");
+  const auto file = dir / "old.sqlite";
+  std::int64_t id = 0;
+  {
+    RunStore store(file);
+    id = store.begin_run(a_run());
+    // Make it look like a version-1 store: drop what later migrations added.
+    store.database().exec("DROP TABLE run_statistics; PRAGMA user_version = 1");
+  }
+  RunStore store(file);
+  sqlite::Statement version(store.database(), "PRAGMA user_version");
+  REQUIRE(version.step());
+  CHECK(version.column_int(0) == RunStore::schema_version());
+  CHECK(store.summary(id).has_value());
+  CHECK_NOTHROW(store.save_statistics(id, {{"steps", 1}}));
 }

@@ -10,6 +10,7 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
+#include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/store/run_store.hpp"
 
@@ -59,6 +60,9 @@ void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
       << "\n  dissipated friction     " << format_optional(s->dissipated_friction_J) << " J"
       << "\n  dissipated viscous      " << format_optional(s->dissipated_viscous_J) << " J"
       << "\n  samples, cycles         " << s->n_samples << ", " << s->n_cycles << "\n";
+  for (const auto& [name, value] : store.statistics(run_id)) {
+    out << "  " << std::left << std::setw(24) << name << std::right << value << "\n";
+  }
   if (s->n_cycles == 0) return;
   sqlite::Statement cycles(store.database(),
                            "SELECT (SELECT freq_hz FROM cycles WHERE run_id = ?1 ORDER BY cycle LIMIT 1), "
@@ -105,6 +109,7 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
     outcome = run_simulation(*engine, scenario, writer, control);
   }
   if (show_progress) std::fputs("\n", stderr);
+  store.save_statistics(run_id, engine->statistics());
   store.finish_run(run_id, {outcome.status, outcome.message, outcome.sim_time_s, outcome.wall_time_s,
                             outcome.initial_energy_J, outcome.max_energy_balance_rel_err});
   print_summary(store, run_id, std::cout);

@@ -120,6 +120,21 @@ void RunStore::finish_run(std::int64_t run_id, const RunEnd& end) {
   update.run();
 }
 
+void RunStore::save_statistics(std::int64_t run_id, const EngineStatistics& statistics) {
+  sqlite::Transaction transaction(db_);
+  sqlite::Statement upsert(db_, "INSERT OR REPLACE INTO run_statistics (run_id, name, value) VALUES (?, ?, ?)");
+  for (const auto& [name, value] : statistics) upsert.bind(1, run_id).bind(2, name).bind(3, value).run();
+  transaction.commit();
+}
+
+EngineStatistics RunStore::statistics(std::int64_t run_id) {
+  sqlite::Statement query(db_, "SELECT name, value FROM run_statistics WHERE run_id = ? ORDER BY name");
+  query.bind(1, run_id);
+  EngineStatistics result;
+  while (query.step()) result.emplace_back(query.column_text(0), query.column_int(1));
+  return result;
+}
+
 std::vector<RunSummary> RunStore::list_runs() {
   sqlite::Statement query(db_, std::string(summary_columns) + " ORDER BY run_id");
   std::vector<RunSummary> runs;

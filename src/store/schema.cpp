@@ -78,7 +78,16 @@ LEFT JOIN samples last ON last.run_id = r.run_id
   AND last.t_s = (SELECT max(t_s) FROM samples m WHERE m.run_id = r.run_id);
 )sql";
 
-constexpr std::array<std::string_view, 1> all{v1_runs_samples_cycles};
+constexpr std::string_view v2_run_statistics = R"sql(
+CREATE TABLE run_statistics (
+  run_id  INTEGER NOT NULL REFERENCES runs (run_id) ON DELETE CASCADE,
+  name    TEXT NOT NULL,     -- e.g. events_sphere_sphere, neighbour_rebuilds
+  value   INTEGER NOT NULL,
+  PRIMARY KEY (run_id, name)
+) STRICT, WITHOUT ROWID;
+)sql";
+
+constexpr std::array<std::string_view, 2> all{v1_runs_samples_cycles, v2_run_statistics};
 
 }  // namespace
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "pdamp/sim/engine.hpp"
+#include "pdamp/model/engine.hpp"
 #include "pdamp/sim/recorder.hpp"
 
 namespace pdamp {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "pdamp/model/engine.hpp"
 #include "pdamp/sim/recorder.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/store/sqlite.hpp"
@@ -56,6 +57,9 @@ class RunStore {
 
   std::int64_t begin_run(const NewRun& run);
   void finish_run(std::int64_t run_id, const RunEnd& end);
+  /// Stores an engine's named totals (replacing earlier values of the same names).
+  void save_statistics(std::int64_t run_id, const EngineStatistics& statistics);
+  EngineStatistics statistics(std::int64_t run_id);
 
   std::vector<RunSummary> list_runs();
   std::optional<RunSummary> summary(std::int64_t run_id);

@@ -1,7 +1,7 @@
-#include "pdamp/sim/engine.hpp"
+#include "pdamp/sim/engine_factory.hpp"
 
 #include "pdamp/errors.hpp"
-#include "pdamp/sim/host_only_engine.hpp"
+#include "pdamp/model/host_only_engine.hpp"
 
 namespace pdamp {
 

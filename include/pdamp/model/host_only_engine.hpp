@@ -4,7 +4,7 @@
 /// tested against.
 
 #include "pdamp/model/host.hpp"
-#include "pdamp/sim/engine.hpp"
+#include "pdamp/model/engine.hpp"
 
 namespace pdamp {
 

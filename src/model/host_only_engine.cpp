@@ -1,4 +1,4 @@
-#include "pdamp/sim/host_only_engine.hpp"
+#include "pdamp/model/host_only_engine.hpp"
 
 namespace pdamp {
 

@@ -1,0 +1,34 @@
+#pragma once
+/// The interface both engines implement. A scenario and an initial particle state go in;
+/// the same observations, state snapshots and statistics come out of either engine.
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "pdamp/model/state.hpp"
+
+namespace pdamp {
+
+/// Named totals an engine keeps (events by type, neighbour-list rebuilds, ...), stored
+/// with the run in the `run_statistics` table.
+using EngineStatistics = std::vector<std::pair<std::string, std::int64_t>>;
+
+class Engine {
+ public:
+  virtual ~Engine() = default;
+  Engine() = default;
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+
+  /// Simulates up to `t_s` and stops exactly there.
+  virtual void advance_to(double t_s) = 0;
+  virtual Observation observe() const = 0;
+  virtual State state() const = 0;
+  /// The time step the engine uses (s), or 0 for an event-driven engine.
+  virtual double time_step_s() const = 0;
+  virtual EngineStatistics statistics() const { return {}; }
+};
+
+}  // namespace pdamp

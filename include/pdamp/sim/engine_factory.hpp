@@ -1,0 +1,24 @@
+#pragma once
+/// Chooses the engine for a model name.
+
+#include <memory>
+#include <string_view>
+
+#include "pdamp/model/engine.hpp"
+#include "pdamp/scenario/scenario.hpp"
+
+namespace pdamp {
+
+enum class Model { soft, hard };
+
+std::string_view to_string(Model model);
+/// Throws InputError for anything but "soft" or "hard".
+Model parse_model(std::string_view text);
+
+/// The engine of `model` for the scenario, starting from `initial` (a placement or a
+/// settled bed) with the host in its initial condition. A scenario without particles
+/// runs the host alone on its exact solution, whatever the model. Throws InputError for
+/// a scenario the engine cannot run.
+std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial);
+
+}  // namespace pdamp

@@ -138,7 +138,7 @@ TEST_CASE("energy: viscous dissipation and excitation work balance the host's en
   }
 }
 
-TEST_CASE("speed and acceleration bounds hold for every later time") {
+TEST_CASE("speed, acceleration and jerk bounds hold for every later time") {
   const char* const modes[] = {
       "",
       "[host]\ndamping_N_s_m = 30\nv0_m_s = 0.3\n",
@@ -152,13 +152,18 @@ TEST_CASE("speed and acceleration bounds hold for every later time") {
     const Scenario s = scenario_from(host_only + text);
     const HostModel model(s);
     const HostTrajectory trajectory(model, 0.1, model.initial_state());
-    double max_speed = 0, max_accel = 0;
-    for (double t = 0.1; t < 5.0; t += 1.3e-4) {
+    double max_speed = 0, max_accel = 0, max_jerk = 0;
+    const double dt = 1.3e-4;
+    for (double t = 0.1; t < 5.0; t += dt) {
       max_speed = std::max(max_speed, std::abs(trajectory.at(t).v_m_s));
       max_accel = std::max(max_accel, std::abs(trajectory.acceleration_m_s2(t)));
+      // The mean jerk over a step never exceeds the largest jerk inside it.
+      max_jerk = std::max(max_jerk, std::abs(trajectory.acceleration_m_s2(t + dt) - trajectory.acceleration_m_s2(t)) / dt);
     }
     CHECK(max_speed <= trajectory.speed_bound_m_s());
     CHECK(max_accel <= trajectory.acceleration_bound_m_s2());
+    CHECK(max_jerk <= trajectory.jerk_bound_m_s3());
+    CHECK(trajectory.jerk_bound_m_s3() <= 10 * max_jerk);
     // ... and they are not uselessly loose.
     CHECK(trajectory.speed_bound_m_s() <= 3 * max_speed);
     CHECK(trajectory.acceleration_bound_m_s2() <= 4 * max_accel);

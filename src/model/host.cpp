@@ -131,6 +131,7 @@ HostTrajectory::HostTrajectory(const HostModel& model, double t0_s, HostState st
     const double amplitude = model.motion_amplitude_m();
     speed_bound_ = amplitude * w;
     acceleration_bound_ = amplitude * w * w;
+    jerk_bound_ = amplitude * w * w * w;
     fastest_rate_1_s_ = w;
     return;
   }
@@ -168,6 +169,13 @@ HostTrajectory::HostTrajectory(const HostModel& model, double t0_s, HostState st
   speed_bound_ = free_speed_bound + w * forced_amplitude;
   acceleration_bound_ = free_acceleration_bound + w * w * forced_amplitude;
   fastest_rate_1_s_ = std::max({omega0, w, 2.0 * decay_rate_1_s_});
+  // M z''' = −K (z' − y') − C (z'' − y'') + F'(t), term by term.
+  const double base_amplitude = model.mode() == ExcitationMode::base_motion ? model.motion_amplitude_m() : 0.0;
+  const double force_amplitude =
+      model.mode() == ExcitationMode::force ? std::hypot(model.forcing_sin_N(), model.forcing_cos_N()) : 0.0;
+  jerk_bound_ = (k * (speed_bound_ + base_amplitude * w) + c * (acceleration_bound_ + base_amplitude * w * w) +
+                 force_amplitude * w) /
+                mass_kg_;
 }
 
 HostState HostTrajectory::at(double t_s) const {

@@ -235,6 +235,14 @@ const std::vector<KeySpec>& key_specs() {
     for (auto& spec : soft_law_keys("soft", &Scenario::soft_particle, "")) k.push_back(spec);
     for (auto& spec : soft_law_keys("soft_wall", &Scenario::soft_wall, "soft")) k.push_back(spec);
     for (auto& spec : hard_law_keys("hard", &Scenario::hard_particle, "0.71", "")) k.push_back(spec);
+    // The hard engine's resting-bed parameters (README, "Resting beds and inelastic collapse").
+    k.push_back({"hard.rest_speed_m_s", "0.005", "m/s",
+                 "a sphere leaving the floor, top cap or a resting sphere slower than this (relative to the host) "
+                 "while the host's acceleration presses it there comes to rest and rides with the host",
+                 number(PDAMP_FIELD(hard_resting.rest_speed_m_s), non_negative), ""});
+    k.push_back({"hard.elastic_speed_m_s", "0.0001", "m/s",
+                 "collisions with a normal approach speed below this are elastic (stops inelastic collapse)",
+                 number(PDAMP_FIELD(hard_resting.elastic_speed_m_s), non_negative), ""});
     for (auto& spec : hard_law_keys("hard_wall", &Scenario::hard_wall, "0.80", "hard")) k.push_back(spec);
     return k;
   }();

@@ -1,6 +1,7 @@
 #include "pdamp/sim/engine_factory.hpp"
 
 #include "pdamp/errors.hpp"
+#include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/host_only_engine.hpp"
 
 namespace pdamp {
@@ -16,6 +17,7 @@ Model parse_model(std::string_view text) {
 
 std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial) {
   if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
+  if (model == Model::hard) return std::make_unique<hard::HardEngine>(scenario, initial);
   throw InputError("the " + std::string(to_string(model)) +
                    " engine is not built yet: only particles.count = 0 (the host alone) runs for now");
 }

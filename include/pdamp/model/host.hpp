@@ -81,6 +81,8 @@ class HostTrajectory {
   /// its forced response can only decrease between impulses).
   double speed_bound_m_s() const { return speed_bound_; }
   double acceleration_bound_m_s2() const { return acceleration_bound_; }
+  /// A bound on |z'''| for every t ≥ t0, from the equation of motion and the bounds above.
+  double jerk_bound_m_s3() const { return jerk_bound_; }
 
   /// ∫ C (z' − y')² dt over [from, to] ⊂ [t0, ∞), exact to round-off (Gauss–Legendre
   /// on panels far shorter than every time scale of the integrand, which is analytic).
@@ -103,7 +105,7 @@ class HostTrajectory {
   double lambda_1_s2_ = 0.0;     ///< K/M − α²: > 0 under-, 0 critically, < 0 over-damped
   double omega0_sq_ = 0.0;       ///< K/M
   double fastest_rate_1_s_ = 0.0;
-  double speed_bound_ = 0.0, acceleration_bound_ = 0.0;
+  double speed_bound_ = 0.0, acceleration_bound_ = 0.0, jerk_bound_ = 0.0;
 };
 
 }  // namespace pdamp

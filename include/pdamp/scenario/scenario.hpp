@@ -74,6 +74,18 @@ struct HardContactLaw {
   double beta0 = 0.35;  ///< Walton's typical value for metal spheres
 };
 
+/// How the hard-sphere engine ends bouncing sequences that would otherwise never stop
+/// (README, "Resting beds and inelastic collapse").
+struct HardRestingSettings {
+  /// A sphere that leaves the floor, the top cap or a resting sphere slower than this
+  /// (normal speed relative to the host), while the host's acceleration presses it
+  /// there, comes to rest and rides with the host as added mass.
+  double rest_speed_m_s = 0.005;
+  /// Collisions whose normal approach speed is below this are elastic in the normal
+  /// direction, which stops inelastic collapse (infinitely many collisions in finite time).
+  double elastic_speed_m_s = 1e-4;
+};
+
 struct RunSettings {
   double duration_s = 1.5;
   double sample_interval_s = 1e-3;
@@ -91,6 +103,7 @@ struct Scenario {
   SoftContactLaw soft_wall;      ///< particle–wall (defaults to the particle–particle law)
   HardContactLaw hard_particle;
   HardContactLaw hard_wall;
+  HardRestingSettings hard_resting;
   RunSettings run;
 
   /// Every key with its resolved value, in scenario-file syntax. Loading this text

@@ -1,0 +1,99 @@
+#pragma once
+/// When will it happen? Exact or provably conservative event times for spheres in free
+/// flight under uniform gravity:
+/// - sphere–sphere: both spheres feel the same gravity, so their relative motion is a
+///   straight line and the contact time a quadratic root;
+/// - plane crossings (cell faces, guards): a quadratic root;
+/// - side wall: a quadratic root when gravity has no horizontal part, else a quartic,
+///   found like the host-dependent events below;
+/// - caps and spheres riding on the host, which move with the host's closed-form but
+///   non-polynomial motion: conservative advancement (`earliest_contact`), which steps
+///   only as far as a bound on the gap's curvature proves the gap cannot close, so it
+///   can never skip an earlier contact.
+
+#include <Eigen/Core>
+#include <limits>
+
+#include "pdamp/model/host.hpp"
+
+namespace pdamp::hard {
+
+inline constexpr double never = std::numeric_limits<double>::infinity();
+
+/// A sphere's free flight from (x0, v0) at t0 under gravity g.
+struct Ballistic {
+  Eigen::Vector3d x0_m;
+  Eigen::Vector3d v0_m_s;
+  double t0_s;
+  Eigen::Vector3d position_at(double t_s, const Eigen::Vector3d& g) const {
+    const double s = t_s - t0_s;
+    return x0_m + s * (v0_m_s + 0.5 * s * g);
+  }
+  Eigen::Vector3d velocity_at(double t_s, const Eigen::Vector3d& g) const { return v0_m_s + (t_s - t0_s) * g; }
+};
+
+/// The first s ≥ 0 at which gap + rate·s + ½ accel·s² reaches 0, or `never`. A gap
+/// that round-off made negative counts as 0 (touching).
+double time_to_close(double gap, double rate, double accel);
+
+/// The first s ≥ 0 at which two spheres, centres dx = x_i − x_j apart moving with
+/// dv = v_i − v_j, come within `contact_distance_m`; 0 if they already overlap and
+/// approach; `never` if they do not meet.
+double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m);
+
+/// Result of a conservative search on [t0, t1]: a contact at t_s, or none before t_s
+/// (t1, or the point where the search stopped early and must be resumed).
+struct Approach {
+  double t_s;
+  bool contact;
+};
+
+struct GapSample {
+  double value;
+  double rate;
+};
+
+/// The first t in [t0, t1] where gap(t) ≤ tolerance while closing, given |gap''| ≤
+/// curvature_bound on [t0, t1]. Each step h keeps the lower bound
+/// gap + rate·h − ½·bound·h² ≥ 0, so no contact lies inside a step; near a contact the
+/// steps shrink quadratically (Newton from the safe side); past a grazing minimum they
+/// grow again. Steps are at least √(2·tolerance/bound), so an overlap is never deeper
+/// than `tolerance`.
+template <class Gap>
+Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound, double tolerance) {
+  constexpr int max_steps = 200;
+  const double bound = curvature_bound > 0 ? curvature_bound : std::numeric_limits<double>::min();
+  const double min_step = std::sqrt(2.0 * tolerance / bound);
+  double t = t0;
+  for (int k = 0; k < max_steps && t < t1; ++k) {
+    const GapSample s = gap(t);
+    if (s.value <= tolerance && s.rate < 0) return {t, true};
+    const double v = std::max(s.value, 0.0);
+    const double root = std::sqrt(s.rate * s.rate + 2.0 * bound * v);
+    const double h = s.rate < 0 ? 2.0 * v / (root - s.rate) : (s.rate + root) / bound;
+    t += std::max(h, min_step);
+  }
+  return {std::min(t, t1), false};
+}
+
+/// The first contact of a free sphere with the bottom or top cap of a cavity of height
+/// `height_m` moving with `host`, searched on [t0, t1].
+Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double height_m, const HostTrajectory& host,
+                     const Eigen::Vector3d& g, double t0, double t1, double tolerance_m);
+
+/// The first contact of a free sphere with a sphere riding on the host at host-frame
+/// position `rider_m` (lab position rider_m + z_host e_z), contact distance σ, on [t0, t1].
+Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, double contact_distance_m,
+                       const HostTrajectory& host, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m);
+
+/// The first contact with the side wall (the centre reaching distance `reach_m` = R − r
+/// from the axis) on [t0, t1].
+Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0, double t1,
+                           double tolerance_m);
+
+/// The first t in [t0, t1] where the host's acceleration minus `level_m_s2` reaches 0
+/// from the side it starts on (`from_above`), searched with the host's jerk bound.
+Approach host_acceleration_crossing(const HostTrajectory& host, double level_m_s2, bool from_above, double t0,
+                                    double t1, double tolerance_m_s2);
+
+}  // namespace pdamp::hard

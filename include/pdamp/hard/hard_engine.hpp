@@ -1,0 +1,141 @@
+#pragma once
+/// The event-driven hard-sphere engine (README, "The hard-sphere engine").
+///
+/// Spheres fly on exact parabolas and are advanced lazily: each keeps the time its
+/// position and velocity refer to, and only the spheres an event involves are moved.
+/// The host follows its closed-form HostTrajectory, restarted after every impulse it
+/// takes. One step of `advance_to` pops the earliest event, drops it if stale, and
+/// handles it; handling a collision applies Walton's impulse, books the losses and
+/// predicts the involved spheres' next events.
+///
+/// Host-dependent predictions (caps, riding spheres) go out of date whenever the host's
+/// motion changes. Only spheres in the "near-host set" carry such exact predictions;
+/// every other sphere carries a `host_check` at the earliest time it could reach a cap
+/// or the resting bed if the host moved as fast as `host_speed_envelope_` allows, which
+/// stays valid across host impulses. A host impulse therefore costs O(|near set|), not O(N).
+///
+/// Resting: a sphere that leaves the floor, the top cap or a riding sphere slower than
+/// hard.rest_speed_m_s while the host's acceleration presses it there stops and rides
+/// with the host as added mass (no events at all) until the host's acceleration stops
+/// pressing (the whole bed is released) or a sphere hits it faster than that speed.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "pdamp/hard/cell_members.hpp"
+#include "pdamp/hard/collision_rules.hpp"
+#include "pdamp/hard/event_prediction.hpp"
+#include "pdamp/hard/event_queue.hpp"
+#include "pdamp/model/cavity.hpp"
+#include "pdamp/model/cell_grid.hpp"
+#include "pdamp/model/engine.hpp"
+
+namespace pdamp::hard {
+
+class HardEngine final : public Engine {
+ public:
+  /// Throws InputError if the initial spheres overlap each other or the walls.
+  HardEngine(const Scenario& scenario, const Particles& initial);
+
+  void advance_to(double t_s) override;
+  Observation observe() const override;
+  State state() const override;
+  double time_step_s() const override { return 0.0; }
+  EngineStatistics statistics() const override;
+
+  /// The deepest overlap now between two spheres or a sphere and a wall (m, 0 if none).
+  double max_overlap_m() const;
+  /// Overlaps never exceed this (m): the contact tolerance of the root finders plus round-off.
+  double overlap_tolerance_m() const { return 10.0 * contact_tolerance_m_; }
+  int riding_count() const { return riding_count_; }
+  /// Collisions processed so far (all kinds).
+  std::int64_t collisions() const;
+
+ private:
+  enum Face : int { x_lower, x_upper, y_lower, y_upper, z_lower, z_upper };
+
+  Ballistic flight(int i) const {
+    return {particles_.position_m.col(i), particles_.velocity_m_s.col(i), t_ref_s_[i]};
+  }
+  /// Lab-frame position of any sphere now (free or riding).
+  Eigen::Vector3d position_now(int i, const HostState& host) const;
+  void bring_to_now(int i);
+  double host_inverse_mass_1_kg() const;
+  double restitution(double approach_speed_m_s, const HardContactLaw& law) const;
+
+  // Prediction.
+  void push(const Event& event) { queue_.push(event); }
+  void predict(int i);
+  void predict_host_relative(int i);
+  void predict_bed_release();
+  void mark_near(int i);
+  void unmark_near(int i);
+  void rebuild_predictions();
+  bool is_current(const Event& event) const;
+
+  // Events.
+  void handle(const Event& event);
+  void collide_spheres(int i, int j);
+  void collide_wall(int i, EventKind wall);
+  void collide_rider(int i, int j);
+  void cross_face(int i, Face face);
+  void release_bed();
+
+  // The host and the bed.
+  /// A sphere-host collision outcome applied to sphere i (arm r n) and the host.
+  void apply_host_impulse(int i, const Eigen::Vector3d& normal, const CollisionOutcome& outcome, const HostState& host);
+  void restart_host(HostState start);
+  void book_host(double t_s);
+  double rider_energy_J(const HostState& host) const;
+  bool presses(double normal_z_from_support) const;
+  void rest_if_slow(int i, const Eigen::Vector3d& normal_from_support, const HostState& host);
+  void attach(int i);
+  void detach(int i, const HostState& host);
+
+  // Settings.
+  Eigen::Vector3d gravity_m_s2_;
+  HardContactLaw sphere_law_, wall_law_;
+  HardRestingSettings resting_;
+  Cavity cavity_;
+  HostModel host_model_;
+  double fastest_host_rate_1_s_;
+
+  // Spheres: free ones hold lab position and velocity at t_ref; riding ones hold their
+  // host-frame position (lab position minus z_host e_z).
+  Particles particles_;
+  std::vector<double> t_ref_s_;
+  std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
+  std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
+  std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
+  std::vector<std::uint8_t> riding_;
+  std::vector<std::uint8_t> near_state_;  ///< 0 out of the near set, 1 in it, 2 listed but left
+  std::vector<int> near_list_;
+
+  CellGrid grid_;            ///< lab frame, for free spheres; the host frame uses the same geometry
+  CellMembers free_cells_;   ///< free spheres by lab cell
+  CellMembers rider_cells_;  ///< riding spheres by host-frame cell
+  EventQueue queue_;
+  double contact_tolerance_m_;
+
+  // Host.
+  HostTrajectory host_;
+  std::uint32_t host_epoch_ = 0;
+  double host_speed_envelope_m_s_ = 0.0;  ///< ≥ the speed bound of every trajectory since the last rebuild
+  double t_s_ = 0.0;
+  double t_host_booked_s_ = 0.0;
+  double riding_mass_kg_ = 0.0;
+  int riding_count_ = 0;
+  int bed_side_ = 0;              ///< +1 riders rest on the bottom cap, −1 on the top cap
+  double bed_depth_bound_m_ = 0;  ///< riders never reach farther from their cap than this
+
+  // Ledger (J).
+  double impact_J_ = 0.0, friction_J_ = 0.0, viscous_J_ = 0.0, excitation_J_ = 0.0;
+
+  struct Statistics {
+    std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
+                 stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, near_repredictions = 0, rebuilds = 0;
+  } stats_;
+};
+
+}  // namespace pdamp::hard

@@ -1,0 +1,64 @@
+#include "pdamp/hard/collision_rules.hpp"
+
+#include <cmath>
+
+namespace pdamp::hard {
+
+Eigen::Vector3d apply_mobility(const Mobility& m, const Eigen::Vector3d& n, const Eigen::Vector3d& p) {
+  const double pn = n.dot(p);
+  Eigen::Vector3d k = m.tangential_1_kg * p + (m.normal_1_kg - m.tangential_1_kg) * pn * n;
+  k.z() += m.host_1_kg * p.z();
+  return k;
+}
+
+namespace {
+
+/// K⁻¹·x by Sherman–Morrison: K = K0 + h e_z e_zᵀ with K0⁻¹ = nnᵀ/a + (I − nnᵀ)/b.
+Eigen::Vector3d solve_mobility(const Mobility& m, const Eigen::Vector3d& n, const Eigen::Vector3d& x) {
+  auto k0_inverse = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d {
+    const double vn = n.dot(v);
+    return v / m.tangential_1_kg + (1.0 / m.normal_1_kg - 1.0 / m.tangential_1_kg) * vn * n;
+  };
+  Eigen::Vector3d y = k0_inverse(x);
+  if (m.host_1_kg == 0.0) return y;
+  const Eigen::Vector3d w = k0_inverse(Eigen::Vector3d::UnitZ());  // K0⁻¹ e_z (K0 is symmetric)
+  return y - (m.host_1_kg * w.dot(x) / (1.0 + m.host_1_kg * w.z())) * w;
+}
+
+}  // namespace
+
+CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3d& n, const Mobility& mobility,
+                                  const HardContactLaw& law, double restitution) {
+  CollisionOutcome out;
+  const double u_n = u.dot(n);
+  if (!(u_n > 0.0)) return out;
+  const Eigen::Vector3d u_t = u - u_n * n;
+  const Eigen::Vector3d target_change = -(1.0 + restitution) * u_n * n - (1.0 + law.beta0) * u_t;
+  Eigen::Vector3d p = solve_mobility(mobility, n, target_change);
+  const double normal_impulse = -p.dot(n);
+  const Eigen::Vector3d p_t = p + normal_impulse * n;
+  const double p_t_norm = p_t.norm();
+  out.sticking = p_t_norm <= law.mu * normal_impulse;
+  if (!out.sticking) {
+    // Sliding: tangential impulse μλ along the sticking impulse's tangential direction,
+    // λ from n·(u + K p) = −e_n u_n.
+    const Eigen::Vector3d t_hat = p_t / p_t_norm;
+    const Eigen::Vector3d k_n = apply_mobility(mobility, n, n);
+    const Eigen::Vector3d k_t = apply_mobility(mobility, n, t_hat);
+    const double denominator = n.dot(k_n) - law.mu * n.dot(k_t);
+    // Positive unless a light host couples friction into the normal direction more than
+    // the spheres resist it; then the sticking impulse stands.
+    if (denominator > 0.0) {
+      const double lambda = (1.0 + restitution) * u_n / denominator;
+      p = -lambda * n + law.mu * lambda * t_hat;
+    }
+  }
+  out.impulse_N_s = p;
+  const Eigen::Vector3d mean_velocity = u + 0.5 * apply_mobility(mobility, n, p);
+  const double p_n = p.dot(n);
+  out.impact_J = -p_n * n.dot(mean_velocity);
+  out.friction_J = -(p - p_n * n).dot(mean_velocity - n.dot(mean_velocity) * n);
+  return out;
+}
+
+}  // namespace pdamp::hard

@@ -1,0 +1,107 @@
+#include "pdamp/hard/event_prediction.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pdamp::hard {
+
+double time_to_close(double gap, double rate, double accel) {
+  gap = std::max(gap, 0.0);
+  if (rate < 0) {
+    const double discriminant = rate * rate - 2.0 * accel * gap;
+    if (discriminant < 0) return never;
+    return 2.0 * gap / (std::sqrt(discriminant) - rate);  // the smaller root, without cancellation
+  }
+  if (accel >= 0) return never;
+  return (rate + std::sqrt(rate * rate - 2.0 * accel * gap)) / -accel;
+}
+
+double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m) {
+  const double b = dx.dot(dv);
+  if (b >= 0) return never;
+  const double c = dx.squaredNorm() - contact_distance_m * contact_distance_m;
+  if (c <= 0) return 0.0;
+  const double discriminant = b * b - dv.squaredNorm() * c;
+  if (discriminant < 0) return never;
+  return c / (std::sqrt(discriminant) - b);
+}
+
+Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double height_m, const HostTrajectory& host,
+                     const Eigen::Vector3d& g, double t0, double t1, double tolerance_m) {
+  // Bottom: gap = z − r − z_h; top: gap = z_h + H − z − r. |gap''| = |g_z − z_h''|.
+  const double sign = top ? -1.0 : 1.0;
+  const double offset = top ? height_m - radius_m : radius_m;
+  auto gap = [&](double t) {
+    const HostState h = host.at(t);
+    const double z = flight.position_at(t, g).z(), vz = flight.velocity_at(t, g).z();
+    return GapSample{sign * (z - h.z_m) - offset, sign * (vz - h.v_m_s)};
+  };
+  return earliest_contact(gap, t0, t1, std::abs(g.z()) + host.acceleration_bound_m_s2(), tolerance_m);
+}
+
+Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, double contact_distance_m,
+                       const HostTrajectory& host, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m) {
+  // f = |dx|² − σ², f'' = 2|dv|² + 2 dx·da, bounded over [t0, t1] by the speeds and
+  // distances the sphere and the host can reach in that time.
+  const double span = t1 - t0;
+  const HostState h0 = host.at(t0);
+  const Eigen::Vector3d dx0 = flight.position_at(t0, g) - rider_m - h0.z_m * Eigen::Vector3d::UnitZ();
+  const double relative_speed = flight.v0_m_s.norm() + g.norm() * (std::abs(t0 - flight.t0_s) + span) +
+                                host.speed_bound_m_s();
+  const double farthest = dx0.norm() + relative_speed * span;
+  const double curvature =
+      2.0 * (relative_speed * relative_speed + farthest * (g.norm() + host.acceleration_bound_m_s2()));
+  auto gap = [&](double t) {
+    const HostState h = host.at(t);
+    Eigen::Vector3d dx = flight.position_at(t, g) - rider_m;
+    dx.z() -= h.z_m;
+    Eigen::Vector3d dv = flight.velocity_at(t, g);
+    dv.z() -= h.v_m_s;
+    return GapSample{dx.squaredNorm() - contact_distance_m * contact_distance_m, 2.0 * dx.dot(dv)};
+  };
+  return earliest_contact(gap, t0, t1, curvature, 2.0 * contact_distance_m * tolerance_m);
+}
+
+Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0, double t1,
+                           double tolerance_m) {
+  const Eigen::Vector2d g_xy = g.head<2>();
+  if (g_xy.squaredNorm() == 0.0) {
+    // Straight line in x, y: |p + v s|² = reach², p inside.
+    const Eigen::Vector2d p = flight.position_at(t0, g).head<2>(), v = flight.v0_m_s.head<2>();
+    const double a = v.squaredNorm(), b = p.dot(v), c = p.squaredNorm() - reach_m * reach_m;
+    if (a == 0.0) return {t1, false};
+    const double root = std::sqrt(std::max(b * b - a * c, 0.0));
+    double s;
+    if (c >= 0) {
+      s = b >= 0 ? 0.0 : -2.0 * b / a;  // touching: now if moving out, else when it comes back
+    } else {
+      s = b > 0 ? -c / (b + root) : (root - b) / a;
+    }
+    return t0 + s < t1 ? Approach{t0 + s, true} : Approach{t1, false};
+  }
+  // A parabola in x, y: f = reach² − |p|², |f''| = 2 |v|² + 2 p·g ≤ 2 (V² + reach |g_xy|).
+  const double speed = flight.velocity_at(t0, g).head<2>().norm() + g_xy.norm() * (t1 - t0);
+  auto gap = [&](double t) {
+    const Eigen::Vector2d p = flight.position_at(t, g).head<2>(), v = flight.velocity_at(t, g).head<2>();
+    return GapSample{reach_m * reach_m - p.squaredNorm(), -2.0 * p.dot(v)};
+  };
+  return earliest_contact(gap, t0, t1, 2.0 * (speed * speed + reach_m * g_xy.norm()), 2.0 * reach_m * tolerance_m);
+}
+
+Approach host_acceleration_crossing(const HostTrajectory& host, double level_m_s2, bool from_above, double t0,
+                                    double t1, double tolerance_m_s2) {
+  // First-order conservative advancement: |f'| ≤ jerk bound.
+  constexpr int max_steps = 400;
+  const double lipschitz = host.jerk_bound_m_s3();
+  const double sign = from_above ? 1.0 : -1.0;
+  double t = t0;
+  for (int k = 0; k < max_steps && t < t1; ++k) {
+    const double f = sign * (host.acceleration_m_s2(t) - level_m_s2);
+    if (f <= tolerance_m_s2) return {t, true};
+    if (lipschitz == 0.0) break;
+    t += f / lipschitz;
+  }
+  return {lipschitz == 0.0 ? t1 : std::min(t, t1), false};
+}
+
+}  // namespace pdamp::hard

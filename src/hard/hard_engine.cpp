@@ -1,0 +1,619 @@
+#include "pdamp/hard/hard_engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <Eigen/Geometry>
+#include <sstream>
+
+#include "pdamp/errors.hpp"
+
+namespace pdamp::hard {
+
+namespace {
+
+/// Cells a little wider than the largest sphere, so that round-off at a face can never
+/// hide a contact between spheres two cells apart.
+constexpr double cell_margin = 1.0 + 1e-6;
+/// Root finders stop this close to contact, relative to the smallest radius.
+constexpr double relative_contact_tolerance = 1e-10;
+
+const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
+
+}  // namespace
+
+HardEngine::HardEngine(const Scenario& scenario, const Particles& initial)
+    : gravity_m_s2_(scenario.gravity_m_s2),
+      sphere_law_(scenario.hard_particle),
+      wall_law_(scenario.hard_wall),
+      resting_(scenario.hard_resting),
+      cavity_(scenario.cavity),
+      host_model_(scenario),
+      fastest_host_rate_1_s_(std::max(scenario.excitation.angular_frequency_rad_s(),
+                                      std::sqrt(scenario.host.stiffness_N_m / scenario.host.mass_kg))),
+      particles_(initial),
+      t_ref_s_(initial.size(), 0.0),
+      counter_(initial.size(), 0),
+      cell_(initial.size()),
+      t_cross_s_(initial.size(), never),
+      riding_(initial.size(), 0),
+      near_state_(initial.size(), 0),
+      grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
+      free_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
+      rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
+      contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
+      host_(host_model_, 0.0, host_model_.initial_state()) {
+  host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
+  const int n = static_cast<int>(particles_.size());
+  for (int i = 0; i < n; ++i) {
+    cell_[i] = grid_.coord_of(particles_.position_m.col(i));
+    free_cells_.insert(i, grid_.index(cell_[i]));
+  }
+  if (const double overlap = max_overlap_m(); overlap > 0.0) {
+    std::ostringstream why;
+    why << "the hard engine needs non-overlapping initial spheres inside the cavity; the deepest overlap is "
+        << overlap << " m";
+    throw InputError(why.str());
+  }
+  rebuild_predictions();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Time and state
+
+void HardEngine::advance_to(double t_s) {
+  while (!queue_.empty() && queue_.top().t_s <= t_s) {
+    const Event event = queue_.top();
+    queue_.pop();
+    if (!is_current(event)) {
+      ++stats_.stale;
+      continue;
+    }
+    t_s_ = std::max(t_s_, event.t_s);
+    handle(event);
+  }
+  t_s_ = t_s;
+  book_host(t_s);
+#ifndef NDEBUG
+  if (const double overlap = max_overlap_m(); overlap > overlap_tolerance_m()) {
+    std::ostringstream why;
+    why << "hard engine invariant broken at t = " << t_s << " s: spheres overlap by " << overlap << " m";
+    throw RuntimeFailure(why.str());
+  }
+#endif
+}
+
+Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {
+  if (riding_[i]) return particles_.position_m.col(i) + host.z_m * e_z;
+  return flight(i).position_at(t_s_, gravity_m_s2_);
+}
+
+void HardEngine::bring_to_now(int i) {
+  const Ballistic f = flight(i);
+  particles_.position_m.col(i) = f.position_at(t_s_, gravity_m_s2_);
+  particles_.velocity_m_s.col(i) = f.velocity_at(t_s_, gravity_m_s2_);
+  t_ref_s_[i] = t_s_;
+}
+
+State HardEngine::state() const {
+  State s{observe(), particles_};
+  const HostState host = s.observation.host;
+  for (Eigen::Index i = 0; i < particles_.size(); ++i) {
+    const int k = static_cast<int>(i);
+    s.particles.position_m.col(i) = position_now(k, host);
+    s.particles.velocity_m_s.col(i) =
+        riding_[k] ? Eigen::Vector3d(host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
+  }
+  return s;
+}
+
+Observation HardEngine::observe() const {
+  Observation o;
+  o.t_s = t_s_;
+  o.host = host_.at(t_s_);
+  EnergyLedger& e = o.energy;
+  for (Eigen::Index i = 0; i < particles_.size(); ++i) {
+    const int k = static_cast<int>(i);
+    const double m = particles_.mass_kg[i];
+    const Eigen::Vector3d v = riding_[k] ? Eigen::Vector3d(o.host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
+    e.particle_translational_J += 0.5 * m * v.squaredNorm();
+    e.particle_rotational_J += 0.5 * particles_.moment_of_inertia(i) * particles_.angular_velocity_rad_s.col(i).squaredNorm();
+    e.gravitational_potential_J -= m * gravity_m_s2_.dot(position_now(k, o.host));
+  }
+  e.host_counts = !host_model_.has_infinite_mass();
+  e.host_kinetic_J = 0.5 * host_model_.mass_kg() * o.host.v_m_s * o.host.v_m_s;
+  e.spring_potential_J = host_model_.spring_energy_J(t_s_, o.host.z_m);
+  e.dissipated_impact_J = impact_J_;
+  e.dissipated_friction_J = friction_J_;
+  // Everything is booked up to t_host_booked_s_ = t_s_ after advance_to; the rest covers
+  // an observation taken before the first advance.
+  e.dissipated_viscous_J = viscous_J_ + host_.viscous_dissipation_J(t_host_booked_s_, t_s_);
+  e.excitation_work_J = excitation_J_ + host_.excitation_work_J(t_host_booked_s_, t_s_);
+  if (host_model_.has_infinite_mass()) {
+    e.excitation_work_J += rider_energy_J(o.host) - rider_energy_J(host_.at(t_host_booked_s_));
+  }
+  o.counters.events = collisions();
+  o.counters.contacts = riding_count_;
+  return o;
+}
+
+std::int64_t HardEngine::collisions() const {
+  return stats_.sphere_sphere + stats_.side_wall + stats_.cap + stats_.rider;
+}
+
+EngineStatistics HardEngine::statistics() const {
+  return {{"events_sphere_sphere", stats_.sphere_sphere},
+          {"events_wall", stats_.side_wall},
+          {"events_cap", stats_.cap},
+          {"events_rider", stats_.rider},
+          {"events_cell_crossing", stats_.cell_crossing},
+          {"events_host_check", stats_.host_check},
+          {"events_stale", stats_.stale},
+          {"bed_rests", stats_.rests},
+          {"bed_knock_offs", stats_.knocked_off},
+          {"bed_releases", stats_.bed_releases},
+          {"near_host_repredictions", stats_.near_repredictions},
+          {"prediction_rebuilds", stats_.rebuilds}};
+}
+
+double HardEngine::max_overlap_m() const {
+  const HostState host = host_.at(t_s_);
+  const auto n = particles_.size();
+  Eigen::Matrix3Xd positions(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) positions.col(i) = position_now(static_cast<int>(i), host);
+  CellList cells;
+  cells.build(grid_, positions);
+  double deepest = 0.0;
+  std::array<int, 27> around{};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double r = particles_.radius_m[i];
+    deepest = std::max(deepest, -cavity_.clearance_m(positions.col(i), r, host.z_m));
+    const int count = grid_.neighbours(grid_.coord_of(positions.col(i)), around);
+    for (int c = 0; c < count; ++c) {
+      for (const int j : cells.particles_in(around[c])) {
+        if (j <= i) continue;
+        const double gap = (positions.col(i) - positions.col(j)).norm() - r - particles_.radius_m[j];
+        deepest = std::max(deepest, -gap);
+      }
+    }
+  }
+  return deepest;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Prediction
+
+bool HardEngine::is_current(const Event& e) const {
+  switch (e.kind) {
+    case EventKind::sphere_sphere:
+      return counter_[e.i] == e.count_i && counter_[e.j] == e.count_j;
+    case EventKind::side_wall:
+    case EventKind::cell_crossing:
+    case EventKind::host_check:
+      return counter_[e.i] == e.count_i;
+    case EventKind::bottom_cap:
+    case EventKind::top_cap:
+    case EventKind::rider:
+      return counter_[e.i] == e.count_i && host_epoch_ == e.count_j;
+    case EventKind::bed_release:
+      break;
+  }
+  return host_epoch_ == e.count_j;
+}
+
+void HardEngine::predict(int i) {
+  const double t = t_s_;
+  const Ballistic f = flight(i);
+  const Eigen::Vector3d x = f.position_at(t, gravity_m_s2_), v = f.velocity_at(t, gravity_m_s2_);
+  const double r = particles_.radius_m[i];
+  const CellCoord c = cell_[i];
+  const Eigen::Vector3d& g = gravity_m_s2_;
+
+  // The next face crossing bounds every other prediction: the sphere is predicted anew there.
+  double crossing = never;
+  int face = -1;
+  const std::array<int, 3> index{c.ix, c.iy, c.iz};
+  for (int axis = 0; axis < 3; ++axis) {
+    const bool periodic = axis == 2;
+    const double lower = periodic ? grid_.z_lower_m(index[axis]) : grid_.x_lower_m(index[axis]);
+    const double upper = periodic ? grid_.z_lower_m(index[axis] + 1) : grid_.x_lower_m(index[axis] + 1);
+    if (periodic || index[axis] > 0) {
+      const double s = time_to_close(x[axis] - lower, v[axis], g[axis]);
+      if (s < crossing) crossing = s, face = 2 * axis;
+    }
+    if (periodic || index[axis] < grid_.nx() - 1) {
+      const double s = time_to_close(upper - x[axis], -v[axis], -g[axis]);
+      if (s < crossing) crossing = s, face = 2 * axis + 1;
+    }
+  }
+  const double horizon = t + crossing;
+  t_cross_s_[i] = horizon;
+  if (face >= 0) push({horizon, i, face, counter_[i], 0, EventKind::cell_crossing});
+
+  std::array<int, 27> around{};
+  const int count = grid_.neighbours(c, around);
+  for (int k = 0; k < count; ++k) {
+    free_cells_.for_each_in(around[k], [&](int j) {
+      if (j == i) return;
+      const Ballistic fj = flight(j);
+      const double s = sphere_sphere_time(x - fj.position_at(t, g), v - fj.velocity_at(t, g), r + particles_.radius_m[j]);
+      if (t + s < horizon) push({t + s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
+    });
+  }
+
+  // The side wall, if any point of the cell is within reach of it.
+  const double far_x = std::max(std::abs(grid_.x_lower_m(c.ix)), std::abs(grid_.x_lower_m(c.ix + 1)));
+  const double far_y = std::max(std::abs(grid_.x_lower_m(c.iy)), std::abs(grid_.x_lower_m(c.iy + 1)));
+  const double reach = cavity_.radius_m() - r;
+  const bool outermost = c.ix == 0 || c.iy == 0 || c.ix == grid_.nx() - 1 || c.iy == grid_.ny() - 1;
+  if (outermost || far_x * far_x + far_y * far_y >= reach * reach) {
+    const Approach wall = side_wall_contact(Ballistic{x, v, t}, reach, g, t, horizon, contact_tolerance_m_);
+    if (wall.contact) push({wall.t_s, i, 0, counter_[i], 0, EventKind::side_wall});
+  }
+
+  // Caps and the resting bed: a guard from the host's speed envelope, or exact predictions.
+  const HostState host = host_.at(t);
+  const double envelope = host_speed_envelope_m_s_;
+  const double to_floor = time_to_close(x.z() - r - host.z_m - bed_depth_bound_m_, v.z() - envelope, g.z());
+  const double to_ceiling = time_to_close(host.z_m + cavity_.height_m() - bed_depth_bound_m_ - x.z() - r,
+                                          -v.z() - envelope, -g.z());
+  const double guard = t + std::min(to_floor, to_ceiling);
+  if (guard <= t) {
+    mark_near(i);
+    predict_host_relative(i);
+    return;
+  }
+  unmark_near(i);
+  if (guard < horizon) push({guard, i, 0, counter_[i], 0, EventKind::host_check});
+}
+
+void HardEngine::predict_host_relative(int i) {
+  const double t = t_s_;
+  const Ballistic f = flight(i);
+  const double r = particles_.radius_m[i];
+  const double horizon = t_cross_s_[i];
+  Approach best{horizon, false};
+  EventKind kind = EventKind::host_check;
+  int partner = 0;
+  auto consider = [&](const Approach& a, EventKind k, int j) {
+    if (a.t_s < best.t_s || (a.contact && !best.contact && a.t_s == best.t_s)) best = a, kind = k, partner = j;
+  };
+  const double height = cavity_.height_m();
+  consider(cap_contact(f, r, false, height, host_, gravity_m_s2_, t, horizon, contact_tolerance_m_),
+           EventKind::bottom_cap, 0);
+  consider(cap_contact(f, r, true, height, host_, gravity_m_s2_, t, horizon, contact_tolerance_m_),
+           EventKind::top_cap, 0);
+
+  if (riding_count_ > 0) {
+    // Riders that the sphere can reach before the host moves one cell: the sphere stays
+    // in its lab cell, the host within a cell of where it is, so the riders' host-frame
+    // heights lie within the window below.
+    const double cell = grid_.cell_size_m();
+    const double host_speed = host_.speed_bound_m_s();
+    const double window_end = host_speed > 0 ? std::min(horizon, t + cell / host_speed) : horizon;
+    const HostState host = host_.at(t);
+    const double lab_floor = grid_.z_lower_m(cell_[i].iz);
+    const int top_layer = static_cast<int>(std::floor(height / cell));
+    const int lowest = std::max(0, static_cast<int>(std::floor((lab_floor - host.z_m - 2.0 * cell) / cell)));
+    const int highest = std::min(top_layer, static_cast<int>(std::floor((lab_floor - host.z_m + 3.0 * cell) / cell)));
+    const CellCoord c = cell_[i];
+    for (int iz = lowest; iz <= highest; ++iz) {
+      for (int iy = std::max(0, c.iy - 1); iy <= std::min(grid_.ny() - 1, c.iy + 1); ++iy) {
+        for (int ix = std::max(0, c.ix - 1); ix <= std::min(grid_.nx() - 1, c.ix + 1); ++ix) {
+          rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
+            consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j], host_, gravity_m_s2_,
+                                   t, window_end, contact_tolerance_m_),
+                     EventKind::rider, j);
+          });
+        }
+      }
+    }
+    consider({window_end, false}, EventKind::host_check, 0);
+  }
+  if (best.contact) {
+    push({best.t_s, i, partner, counter_[i], host_epoch_, kind});
+  } else if (best.t_s < horizon) {
+    push({best.t_s, i, 0, counter_[i], 0, EventKind::host_check});
+  }
+}
+
+void HardEngine::predict_bed_release() {
+  if (riding_count_ == 0) return;
+  // Riders on the bottom cap leave when z_h'' falls to g_z, riders on the top when it rises to it.
+  const double scale = std::abs(gravity_m_s2_.z()) + host_.acceleration_bound_m_s2();
+  const Approach release = host_acceleration_crossing(host_, gravity_m_s2_.z(), bed_side_ > 0, t_s_,
+                                                      t_s_ + 1.0 / fastest_host_rate_1_s_, 1e-12 * scale);
+  push({release.t_s, -1, release.contact ? 1 : 0, 0, host_epoch_, EventKind::bed_release});
+}
+
+void HardEngine::mark_near(int i) {
+  if (near_state_[i] == 0) near_list_.push_back(i);
+  near_state_[i] = 1;
+}
+
+void HardEngine::unmark_near(int i) {
+  if (near_state_[i] == 1) near_state_[i] = 2;
+}
+
+void HardEngine::rebuild_predictions() {
+  ++stats_.rebuilds;
+  queue_.clear();
+  ++host_epoch_;
+  for (const int i : near_list_) near_state_[i] = 0;
+  near_list_.clear();
+  for (int i = 0; i < static_cast<int>(particles_.size()); ++i) {
+    if (!riding_[i]) predict(i);
+  }
+  predict_bed_release();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Events
+
+void HardEngine::handle(const Event& e) {
+  switch (e.kind) {
+    case EventKind::sphere_sphere:
+      ++stats_.sphere_sphere;
+      collide_spheres(e.i, e.j);
+      return;
+    case EventKind::side_wall:
+      ++stats_.side_wall;
+      collide_wall(e.i, e.kind);
+      return;
+    case EventKind::bottom_cap:
+    case EventKind::top_cap:
+      ++stats_.cap;
+      collide_wall(e.i, e.kind);
+      return;
+    case EventKind::rider:
+      ++stats_.rider;
+      collide_rider(e.i, e.j);
+      return;
+    case EventKind::cell_crossing:
+      ++stats_.cell_crossing;
+      cross_face(e.i, static_cast<Face>(e.j));
+      return;
+    case EventKind::host_check:
+      ++stats_.host_check;
+      mark_near(e.i);
+      predict_host_relative(e.i);
+      return;
+    case EventKind::bed_release:
+      if (e.j == 1) {
+        release_bed();
+      } else {
+        predict_bed_release();
+      }
+      return;
+  }
+}
+
+double HardEngine::restitution(double approach_speed_m_s, const HardContactLaw& law) const {
+  return approach_speed_m_s < resting_.elastic_speed_m_s ? 1.0 : law.en;
+}
+
+void HardEngine::collide_spheres(int i, int j) {
+  bring_to_now(i);
+  bring_to_now(j);
+  const double ri = particles_.radius_m[i], rj = particles_.radius_m[j];
+  const Eigen::Vector3d n = (particles_.position_m.col(j) - particles_.position_m.col(i)).normalized();
+  const Eigen::Vector3d u = particles_.velocity_m_s.col(i) - particles_.velocity_m_s.col(j) +
+                            (ri * particles_.angular_velocity_rad_s.col(i) + rj * particles_.angular_velocity_rad_s.col(j)).cross(n);
+  const double mi = particles_.mass_kg[i], mj = particles_.mass_kg[j];
+  const CollisionOutcome out = walton_collision(u, n, sphere_mobility(mi) + sphere_mobility(mj), sphere_law_,
+                                                restitution(u.dot(n), sphere_law_));
+  const Eigen::Vector3d& p = out.impulse_N_s;
+  const Eigen::Vector3d torque_arm = n.cross(p);
+  particles_.velocity_m_s.col(i) += p / mi;
+  particles_.velocity_m_s.col(j) -= p / mj;
+  particles_.angular_velocity_rad_s.col(i) += ri * torque_arm / particles_.moment_of_inertia(i);
+  particles_.angular_velocity_rad_s.col(j) += rj * torque_arm / particles_.moment_of_inertia(j);
+  impact_J_ += out.impact_J;
+  friction_J_ += out.friction_J;
+  ++counter_[i];
+  ++counter_[j];
+  predict(i);
+  predict(j);
+}
+
+double HardEngine::host_inverse_mass_1_kg() const {
+  return host_model_.has_infinite_mass() ? 0.0 : 1.0 / (host_model_.mass_kg() + riding_mass_kg_);
+}
+
+void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out, const HostState& host) {
+  const Eigen::Vector3d& p = out.impulse_N_s;
+  const double r = particles_.radius_m[i];
+  particles_.velocity_m_s.col(i) += p / particles_.mass_kg[i];
+  particles_.angular_velocity_rad_s.col(i) += r * n.cross(p) / particles_.moment_of_inertia(static_cast<Eigen::Index>(i));
+  impact_J_ += out.impact_J;
+  friction_J_ += out.friction_J;
+  ++counter_[i];
+  unmark_near(i);
+  if (host_model_.has_infinite_mass()) {
+    excitation_J_ += p.z() * host.v_m_s;  // the wall's work on the sphere
+  } else if (p.z() != 0.0) {
+    restart_host({host.z_m, host.v_m_s - p.z() * host_inverse_mass_1_kg()});
+  }
+}
+
+void HardEngine::collide_wall(int i, EventKind wall) {
+  bring_to_now(i);
+  const HostState host = host_.at(t_s_);
+  const Eigen::Vector3d x = particles_.position_m.col(i);
+  Eigen::Vector3d n;  // from the sphere towards the wall
+  if (wall == EventKind::side_wall) {
+    n = Eigen::Vector3d(x.x(), x.y(), 0.0).normalized();
+  } else {
+    n = wall == EventKind::bottom_cap ? -e_z : e_z;
+  }
+  const double r = particles_.radius_m[i];
+  const Eigen::Vector3d u = particles_.velocity_m_s.col(i) +
+                            (r * particles_.angular_velocity_rad_s.col(i)).cross(n) - host.v_m_s * e_z;
+  const Mobility mobility = sphere_mobility(particles_.mass_kg[i]) + Mobility{0, 0, host_inverse_mass_1_kg()};
+  const CollisionOutcome out = walton_collision(u, n, mobility, wall_law_, restitution(u.dot(n), wall_law_));
+  apply_host_impulse(i, n, out, host);
+  if (wall == EventKind::side_wall) {
+    predict(i);
+  } else {
+    rest_if_slow(i, -n, host_.at(t_s_));
+  }
+}
+
+void HardEngine::collide_rider(int i, int j) {
+  bring_to_now(i);
+  const HostState host = host_.at(t_s_);
+  const double ri = particles_.radius_m[i];
+  const Eigen::Vector3d n = (position_now(j, host) - particles_.position_m.col(i)).normalized();
+  const Eigen::Vector3d u = particles_.velocity_m_s.col(i) +
+                            (ri * particles_.angular_velocity_rad_s.col(i)).cross(n) - host.v_m_s * e_z;
+  if (u.dot(n) > resting_.rest_speed_m_s) {
+    // Hit hard enough to knock the rider off: it leaves the bed with the host's velocity
+    // (no momentum changes hands) and the collision is between two free spheres.
+    ++stats_.knocked_off;
+    detach(j, host);
+    restart_host(host);
+    collide_spheres(i, j);
+    return;
+  }
+  const Mobility mobility = sphere_mobility(particles_.mass_kg[i]) + Mobility{0, 0, host_inverse_mass_1_kg()};
+  const CollisionOutcome out = walton_collision(u, n, mobility, sphere_law_, restitution(u.dot(n), sphere_law_));
+  apply_host_impulse(i, n, out, host);
+  rest_if_slow(i, -n, host_.at(t_s_));
+}
+
+void HardEngine::cross_face(int i, Face face) {
+  CellCoord& c = cell_[i];
+  const int step = face % 2 == 1 ? 1 : -1;
+  switch (face / 2) {
+    case 0: c.ix += step; break;
+    case 1: c.iy += step; break;
+    default: c.iz += step; break;
+  }
+  free_cells_.move(i, grid_.index(c));
+  predict(i);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The host and the resting bed
+
+void HardEngine::book_host(double t_s) {
+  viscous_J_ += host_.viscous_dissipation_J(t_host_booked_s_, t_s);
+  excitation_J_ += host_.excitation_work_J(t_host_booked_s_, t_s);
+  if (host_model_.has_infinite_mass()) {
+    // A prescribed host carries its riders: their energy change is the host's work.
+    excitation_J_ += rider_energy_J(host_.at(t_s)) - rider_energy_J(host_.at(t_host_booked_s_));
+  }
+  t_host_booked_s_ = t_s;
+}
+
+double HardEngine::rider_energy_J(const HostState& host) const {
+  // The part of the riders' kinetic and potential energy that moves with the host.
+  return riding_mass_kg_ * (0.5 * host.v_m_s * host.v_m_s - gravity_m_s2_.z() * host.z_m);
+}
+
+void HardEngine::restart_host(HostState start) {
+  book_host(t_s_);
+  host_ = HostTrajectory(host_model_, t_s_, start, riding_mass_kg_, riding_mass_kg_ * gravity_m_s2_.z());
+  ++host_epoch_;
+  if (host_.speed_bound_m_s() > host_speed_envelope_m_s_) {
+    host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
+    rebuild_predictions();
+    return;
+  }
+  std::size_t kept = 0;
+  for (const int i : near_list_) {
+    if (near_state_[i] == 1) {
+      near_list_[kept++] = i;
+      ++stats_.near_repredictions;
+      predict_host_relative(i);
+    } else {
+      near_state_[i] = 0;
+    }
+  }
+  near_list_.resize(kept);
+  predict_bed_release();
+}
+
+bool HardEngine::presses(double normal_z_from_support) const {
+  // The support pushes the sphere while the relative gravity g − z_h'' points into it.
+  const double relative_gravity_z = gravity_m_s2_.z() - host_.acceleration_m_s2(t_s_);
+  return normal_z_from_support * relative_gravity_z < 0.0;
+}
+
+void HardEngine::rest_if_slow(int i, const Eigen::Vector3d& normal_from_support, const HostState& host) {
+  const double side = normal_from_support.z() > 0 ? 1 : -1;
+  const double leaving = (particles_.velocity_m_s.col(i) - host.v_m_s * e_z).dot(normal_from_support);
+  if (leaving < resting_.rest_speed_m_s && presses(normal_from_support.z()) &&
+      (riding_count_ == 0 || bed_side_ == side)) {
+    bed_side_ = static_cast<int>(side);
+    attach(i);
+  } else {
+    predict(i);
+  }
+}
+
+void HardEngine::attach(int i) {
+  ++stats_.rests;
+  book_host(t_s_);  // with the riding mass of the interval that ends now
+  const HostState host = host_.at(t_s_);
+  const double m = particles_.mass_kg[i];
+  const Eigen::Vector3d v = particles_.velocity_m_s.col(i);
+  const double relative_vz = v.z() - host.v_m_s;
+  // A perfectly inelastic, sticking collision with the host: the normal part of the loss
+  // is impact, the sliding and spinning that stop are friction.
+  friction_J_ += 0.5 * m * (v.x() * v.x() + v.y() * v.y()) +
+                 0.5 * particles_.moment_of_inertia(i) * particles_.angular_velocity_rad_s.col(i).squaredNorm();
+  HostState after = host;
+  if (host_model_.has_infinite_mass()) {
+    impact_J_ += 0.5 * m * relative_vz * relative_vz;
+    excitation_J_ += m * (host.v_m_s - v.z()) * host.v_m_s;
+  } else {
+    const double carried = host_model_.mass_kg() + riding_mass_kg_;
+    impact_J_ += 0.5 * m * carried / (m + carried) * relative_vz * relative_vz;
+    after.v_m_s = (carried * host.v_m_s + m * v.z()) / (carried + m);
+  }
+  free_cells_.remove(i);
+  unmark_near(i);
+  ++counter_[i];
+  riding_[i] = 1;
+  const Eigen::Vector3d host_frame = particles_.position_m.col(i) - host.z_m * e_z;
+  particles_.position_m.col(i) = host_frame;
+  particles_.velocity_m_s.col(i).setZero();
+  particles_.angular_velocity_rad_s.col(i).setZero();
+  rider_cells_.insert(i, grid_.cell_of(host_frame));
+  riding_mass_kg_ += m;
+  ++riding_count_;
+  const double r = particles_.radius_m[i];
+  const double depth = bed_side_ > 0 ? host_frame.z() + r : cavity_.height_m() - host_frame.z() + r;
+  const bool deeper = depth > bed_depth_bound_m_;
+  if (deeper) bed_depth_bound_m_ = depth + grid_.cell_size_m();
+  restart_host(after);
+  if (deeper) rebuild_predictions();
+}
+
+void HardEngine::detach(int i, const HostState& host) {
+  book_host(t_s_);  // with the riding mass of the interval that ends now
+  rider_cells_.remove(i);
+  riding_[i] = 0;
+  ++counter_[i];
+  particles_.position_m.col(i) += host.z_m * e_z;
+  particles_.velocity_m_s.col(i) = host.v_m_s * e_z;
+  t_ref_s_[i] = t_s_;
+  cell_[i] = grid_.coord_of(particles_.position_m.col(i));
+  free_cells_.insert(i, grid_.index(cell_[i]));
+  --riding_count_;
+  riding_mass_kg_ = riding_count_ > 0 ? riding_mass_kg_ - particles_.mass_kg[i] : 0.0;
+}
+
+void HardEngine::release_bed() {
+  ++stats_.bed_releases;
+  const HostState host = host_.at(t_s_);
+  std::vector<int> released;
+  for (int i = 0; i < static_cast<int>(particles_.size()); ++i) {
+    if (riding_[i]) released.push_back(i);
+  }
+  for (const int i : released) detach(i, host);
+  restart_host(host);
+  for (const int i : released) predict(i);
+}
+
+}  // namespace pdamp::hard

@@ -27,12 +27,11 @@ Eigen::Vector3d solve_mobility(const Mobility& m, const Eigen::Vector3d& n, cons
 
 }  // namespace
 
-CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3d& n, const Mobility& mobility,
-                                  const HardContactLaw& law, double restitution) {
+CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double u_n,
+                                  const Mobility& mobility, const HardContactLaw& law, double restitution) {
   CollisionOutcome out;
-  const double u_n = u.dot(n);
   if (!(u_n > 0.0)) return out;
-  const Eigen::Vector3d u_t = u - u_n * n;
+  const Eigen::Vector3d u_t = u - u.dot(n) * n;
   const Eigen::Vector3d target_change = -(1.0 + restitution) * u_n * n - (1.0 + law.beta0) * u_t;
   Eigen::Vector3d p = solve_mobility(mobility, n, target_change);
   const double normal_impulse = -p.dot(n);
@@ -54,7 +53,7 @@ CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3
     }
   }
   out.impulse_N_s = p;
-  const Eigen::Vector3d mean_velocity = u + 0.5 * apply_mobility(mobility, n, p);
+  const Eigen::Vector3d mean_velocity = u_t + u_n * n + 0.5 * apply_mobility(mobility, n, p);
   const double p_n = p.dot(n);
   out.impact_J = -p_n * n.dot(mean_velocity);
   out.friction_J = -(p - p_n * n).dot(mean_velocity - n.dot(mean_velocity) * n);

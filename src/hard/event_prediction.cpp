@@ -27,12 +27,12 @@ double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, 
 }
 
 Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double height_m, const HostTrajectory& host,
-                     const Eigen::Vector3d& g, double t0, double t1, double tolerance_m) {
+                     const HostState& host_at_t0, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m) {
   // Bottom: gap = z − r − z_h; top: gap = z_h + H − z − r. |gap''| = |g_z − z_h''|.
   const double sign = top ? -1.0 : 1.0;
-  const double offset = top ? height_m - radius_m : radius_m;
+  const double offset = top ? radius_m - height_m : radius_m;
   auto gap = [&](double t) {
-    const HostState h = host.at(t);
+    const HostState h = t == t0 ? host_at_t0 : host.at(t);
     const double z = flight.position_at(t, g).z(), vz = flight.velocity_at(t, g).z();
     return GapSample{sign * (z - h.z_m) - offset, sign * (vz - h.v_m_s)};
   };
@@ -40,26 +40,26 @@ Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double 
 }
 
 Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, double contact_distance_m,
-                       const HostTrajectory& host, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m) {
-  // f = |dx|² − σ², f'' = 2|dv|² + 2 dx·da, bounded over [t0, t1] by the speeds and
-  // distances the sphere and the host can reach in that time.
-  const double span = t1 - t0;
-  const HostState h0 = host.at(t0);
-  const Eigen::Vector3d dx0 = flight.position_at(t0, g) - rider_m - h0.z_m * Eigen::Vector3d::UnitZ();
-  const double relative_speed = flight.v0_m_s.norm() + g.norm() * (std::abs(t0 - flight.t0_s) + span) +
-                                host.speed_bound_m_s();
-  const double farthest = dx0.norm() + relative_speed * span;
-  const double curvature =
-      2.0 * (relative_speed * relative_speed + farthest * (g.norm() + host.acceleration_bound_m_s2()));
+                       const HostTrajectory& host, const HostState& host_at_t0, const Eigen::Vector3d& g, double t0,
+                       double t1, double tolerance_m) {
+  // The surface gap d = |dx| − σ has d'' = (|dv|² − d'²)/|dx| + dx·da/|dx|, so while the
+  // spheres are apart (|dx| ≥ σ) |d''| ≤ V²/σ + A, with A = |g| + |z_h''|max bounding the
+  // relative acceleration and V = |dv(t0)| + A (t1 − t0) the relative speed.
+  const double relative_acceleration = g.norm() + host.acceleration_bound_m_s2();
+  Eigen::Vector3d dv0 = flight.velocity_at(t0, g);
+  dv0.z() -= host_at_t0.v_m_s;
+  const double relative_speed = dv0.norm() + relative_acceleration * (t1 - t0);
+  const double curvature = relative_speed * relative_speed / contact_distance_m + relative_acceleration;
   auto gap = [&](double t) {
-    const HostState h = host.at(t);
+    const HostState h = t == t0 ? host_at_t0 : host.at(t);
     Eigen::Vector3d dx = flight.position_at(t, g) - rider_m;
     dx.z() -= h.z_m;
     Eigen::Vector3d dv = flight.velocity_at(t, g);
     dv.z() -= h.v_m_s;
-    return GapSample{dx.squaredNorm() - contact_distance_m * contact_distance_m, 2.0 * dx.dot(dv)};
+    const double distance = dx.norm();
+    return GapSample{distance - contact_distance_m, dx.dot(dv) / distance};
   };
-  return earliest_contact(gap, t0, t1, curvature, 2.0 * contact_distance_m * tolerance_m);
+  return earliest_contact(gap, t0, t1, curvature, tolerance_m);
 }
 
 Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0, double t1,

@@ -16,6 +16,9 @@ namespace {
 constexpr double cell_margin = 1.0 + 1e-6;
 /// Root finders stop this close to contact, relative to the smallest radius.
 constexpr double relative_contact_tolerance = 1e-10;
+/// Near spheres switch to exact host-dependent predictions within this gap, relative to
+/// the smallest radius: a wider margin means rarer sweeps but more imminent spheres.
+constexpr double host_margin_fraction = 0.1;
 
 const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 
@@ -36,13 +39,19 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial)
       cell_(initial.size()),
       t_cross_s_(initial.size(), never),
       riding_(initial.size(), 0),
-      near_state_(initial.size(), 0),
+      near_(static_cast<int>(initial.size())),
+      imminent_(static_cast<int>(initial.size())),
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
       free_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
   host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
+  host_margin_m_ = host_margin_fraction * initial.radius_m.minCoeff();
+  host_horizon_s_ = 1.0 / fastest_host_rate_1_s_;
+  // A collision cascade through a touching bed can take a few events per contact at one
+  // instant; far more than that means no progress.
+  stall_limit_ = 1000 * static_cast<std::int64_t>(initial.size()) + 100000;
   const int n = static_cast<int>(particles_.size());
   for (int i = 0; i < n; ++i) {
     cell_[i] = grid_.coord_of(particles_.position_m.col(i));
@@ -68,7 +77,16 @@ void HardEngine::advance_to(double t_s) {
       ++stats_.stale;
       continue;
     }
-    t_s_ = std::max(t_s_, event.t_s);
+    if (event.t_s > t_s_) {
+      t_s_ = event.t_s;
+      events_at_this_instant_ = 0;
+    } else if (++events_at_this_instant_ > stall_limit_) {
+      std::ostringstream why;
+      why << "hard engine stalled at t = " << t_s_ << " s: " << events_at_this_instant_
+          << " events without time advancing (last: kind " << static_cast<int>(event.kind) << ", sphere " << event.i
+          << ", partner " << event.j << ")";
+      throw RuntimeFailure(why.str());
+    }
     handle(event);
   }
   t_s_ = t_s;
@@ -147,11 +165,15 @@ EngineStatistics HardEngine::statistics() const {
           {"events_rider", stats_.rider},
           {"events_cell_crossing", stats_.cell_crossing},
           {"events_host_check", stats_.host_check},
+          {"events_host_margin", stats_.host_margin},
           {"events_stale", stats_.stale},
           {"bed_rests", stats_.rests},
           {"bed_knock_offs", stats_.knocked_off},
           {"bed_releases", stats_.bed_releases},
-          {"near_host_repredictions", stats_.near_repredictions},
+          {"host_impulses", stats_.host_impulses},
+          {"imminent_repredictions", stats_.imminent_repredictions},
+          {"near_sweeps", stats_.near_sweeps},
+          {"near_repredictions", stats_.near_repredictions},
           {"prediction_rebuilds", stats_.rebuilds}};
 }
 
@@ -190,6 +212,8 @@ bool HardEngine::is_current(const Event& e) const {
     case EventKind::cell_crossing:
     case EventKind::host_check:
       return counter_[e.i] == e.count_i;
+    case EventKind::host_margin:
+      return counter_[e.i] == e.count_i && sweep_generation_ == e.count_j;
     case EventKind::bottom_cap:
     case EventKind::top_cap:
     case EventKind::rider:
@@ -258,62 +282,72 @@ void HardEngine::predict(int i) {
                                           -v.z() - envelope, -g.z());
   const double guard = t + std::min(to_floor, to_ceiling);
   if (guard <= t) {
-    mark_near(i);
+    near_.insert(i);
     predict_host_relative(i);
     return;
   }
-  unmark_near(i);
+  leave_host_sets(i);
   if (guard < horizon) push({guard, i, 0, counter_[i], 0, EventKind::host_check});
 }
 
 void HardEngine::predict_host_relative(int i) {
   const double t = t_s_;
+  const double horizon = t_cross_s_[i];
+  const double end = std::min(horizon, t + host_horizon_s_);
+  const HostContact margin = host_contact(i, end, host_margin_m_);
+  if (!(margin.when.contact && margin.when.t_s <= t)) {
+    imminent_.erase(i);
+    if (margin.when.t_s < horizon) push({margin.when.t_s, i, 0, counter_[i], sweep_generation_, EventKind::host_margin});
+    return;
+  }
+  imminent_.insert(i);
+  const HostContact exact = host_contact(i, end, 0.0);
+  if (exact.when.contact) {
+    push({exact.when.t_s, i, exact.partner, counter_[i], host_epoch_, exact.kind});
+  } else if (exact.when.t_s < horizon) {
+    push({exact.when.t_s, i, 0, counter_[i], sweep_generation_, EventKind::host_margin});
+  }
+}
+
+HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double margin_m) const {
+  const double t = t_s_;
   const Ballistic f = flight(i);
   const double r = particles_.radius_m[i];
-  const double horizon = t_cross_s_[i];
-  Approach best{horizon, false};
-  EventKind kind = EventKind::host_check;
-  int partner = 0;
-  auto consider = [&](const Approach& a, EventKind k, int j) {
-    if (a.t_s < best.t_s || (a.contact && !best.contact && a.t_s == best.t_s)) best = a, kind = k, partner = j;
+  HostContact best{{end_s, false}, EventKind::host_margin, 0};
+  auto consider = [&](const Approach& a, EventKind kind, int partner) {
+    if (a.t_s < best.when.t_s || (a.contact && !best.when.contact && a.t_s == best.when.t_s)) best = {a, kind, partner};
   };
   const double height = cavity_.height_m();
-  consider(cap_contact(f, r, false, height, host_, gravity_m_s2_, t, horizon, contact_tolerance_m_),
+  const HostState host = host_.at(t);
+  consider(cap_contact(f, r + margin_m, false, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_),
            EventKind::bottom_cap, 0);
-  consider(cap_contact(f, r, true, height, host_, gravity_m_s2_, t, horizon, contact_tolerance_m_),
+  consider(cap_contact(f, r + margin_m, true, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_),
            EventKind::top_cap, 0);
-
-  if (riding_count_ > 0) {
-    // Riders that the sphere can reach before the host moves one cell: the sphere stays
-    // in its lab cell, the host within a cell of where it is, so the riders' host-frame
-    // heights lie within the window below.
-    const double cell = grid_.cell_size_m();
-    const double host_speed = host_.speed_bound_m_s();
-    const double window_end = host_speed > 0 ? std::min(horizon, t + cell / host_speed) : horizon;
-    const HostState host = host_.at(t);
-    const double lab_floor = grid_.z_lower_m(cell_[i].iz);
-    const int top_layer = static_cast<int>(std::floor(height / cell));
-    const int lowest = std::max(0, static_cast<int>(std::floor((lab_floor - host.z_m - 2.0 * cell) / cell)));
-    const int highest = std::min(top_layer, static_cast<int>(std::floor((lab_floor - host.z_m + 3.0 * cell) / cell)));
-    const CellCoord c = cell_[i];
-    for (int iz = lowest; iz <= highest; ++iz) {
-      for (int iy = std::max(0, c.iy - 1); iy <= std::min(grid_.ny() - 1, c.iy + 1); ++iy) {
-        for (int ix = std::max(0, c.ix - 1); ix <= std::min(grid_.nx() - 1, c.ix + 1); ++ix) {
-          rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
-            consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j], host_, gravity_m_s2_,
-                                   t, window_end, contact_tolerance_m_),
-                     EventKind::rider, j);
-          });
-        }
+  if (riding_count_ == 0) return best;
+  // Riders that the sphere can reach before the host moves one cell: the sphere stays in
+  // its lab cell, the host within a cell of where it is now, so the riders' host-frame
+  // heights lie within the window below.
+  const double cell = grid_.cell_size_m();
+  const double host_speed = host_.speed_bound_m_s();
+  const double window_end = host_speed > 0 ? std::min(end_s, t + cell / host_speed) : end_s;
+  const double lab_floor = grid_.z_lower_m(cell_[i].iz);
+  const int top_layer = static_cast<int>(std::floor(height / cell));
+  const int lowest = std::max(0, static_cast<int>(std::floor((lab_floor - host.z_m - 2.0 * cell) / cell)));
+  const int highest = std::min(top_layer, static_cast<int>(std::floor((lab_floor - host.z_m + 3.0 * cell) / cell)));
+  const CellCoord c = cell_[i];
+  for (int iz = lowest; iz <= highest; ++iz) {
+    for (int iy = std::max(0, c.iy - 1); iy <= std::min(grid_.ny() - 1, c.iy + 1); ++iy) {
+      for (int ix = std::max(0, c.ix - 1); ix <= std::min(grid_.nx() - 1, c.ix + 1); ++ix) {
+        rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
+          consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j] + margin_m, host_, host,
+                                 gravity_m_s2_, t, window_end, contact_tolerance_m_),
+                   EventKind::rider, j);
+        });
       }
     }
-    consider({window_end, false}, EventKind::host_check, 0);
   }
-  if (best.contact) {
-    push({best.t_s, i, partner, counter_[i], host_epoch_, kind});
-  } else if (best.t_s < horizon) {
-    push({best.t_s, i, 0, counter_[i], 0, EventKind::host_check});
-  }
+  consider({window_end, false}, EventKind::host_margin, 0);
+  return best;
 }
 
 void HardEngine::predict_bed_release() {
@@ -325,21 +359,50 @@ void HardEngine::predict_bed_release() {
   push({release.t_s, -1, release.contact ? 1 : 0, 0, host_epoch_, EventKind::bed_release});
 }
 
-void HardEngine::mark_near(int i) {
-  if (near_state_[i] == 0) near_list_.push_back(i);
-  near_state_[i] = 1;
+void HardEngine::leave_host_sets(int i) {
+  near_.erase(i);
+  imminent_.erase(i);
 }
 
-void HardEngine::unmark_near(int i) {
-  if (near_state_[i] == 1) near_state_[i] = 2;
+void HardEngine::sweep_near() {
+  // τ = √(τ · time since the last sweep) balances sweeps against horizon ends.
+  const double since = t_s_ - t_last_sweep_s_;
+  host_horizon_s_ = std::clamp(std::sqrt(host_horizon_s_ * since), 1e-9 / fastest_host_rate_1_s_,
+                               1.0 / fastest_host_rate_1_s_);
+  t_last_sweep_s_ = t_s_;
+  deviation_budget_m_ = 0.0;
+  ++sweep_generation_;
+  ++stats_.near_sweeps;
+  near_.sweep([this](int i) {
+    near_.insert(i);
+    ++stats_.near_repredictions;
+    predict_host_relative(i);
+  });
+}
+
+void HardEngine::repredict_near_around(const Eigen::Vector3d& lab_position) {
+  // A near sphere looks for riders within a cell of its own and the host's motion
+  // within its window: three layers either way cover every sphere that could reach here.
+  const CellCoord c = grid_.coord_of(lab_position);
+  for (int iz = c.iz - 3; iz <= c.iz + 3; ++iz) {
+    for (int iy = std::max(0, c.iy - 1); iy <= std::min(grid_.ny() - 1, c.iy + 1); ++iy) {
+      for (int ix = std::max(0, c.ix - 1); ix <= std::min(grid_.nx() - 1, c.ix + 1); ++ix) {
+        free_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
+          if (near_.contains(j) && cell_[j].iz == iz) predict_host_relative(j);
+        });
+      }
+    }
+  }
 }
 
 void HardEngine::rebuild_predictions() {
   ++stats_.rebuilds;
   queue_.clear();
   ++host_epoch_;
-  for (const int i : near_list_) near_state_[i] = 0;
-  near_list_.clear();
+  ++sweep_generation_;
+  deviation_budget_m_ = 0.0;
+  near_.clear();
+  imminent_.clear();
   for (int i = 0; i < static_cast<int>(particles_.size()); ++i) {
     if (!riding_[i]) predict(i);
   }
@@ -374,7 +437,11 @@ void HardEngine::handle(const Event& e) {
       return;
     case EventKind::host_check:
       ++stats_.host_check;
-      mark_near(e.i);
+      near_.insert(e.i);
+      predict_host_relative(e.i);
+      return;
+    case EventKind::host_margin:
+      ++stats_.host_margin;
       predict_host_relative(e.i);
       return;
     case EventKind::bed_release:
@@ -396,11 +463,13 @@ void HardEngine::collide_spheres(int i, int j) {
   bring_to_now(j);
   const double ri = particles_.radius_m[i], rj = particles_.radius_m[j];
   const Eigen::Vector3d n = (particles_.position_m.col(j) - particles_.position_m.col(i)).normalized();
-  const Eigen::Vector3d u = particles_.velocity_m_s.col(i) - particles_.velocity_m_s.col(j) +
-                            (ri * particles_.angular_velocity_rad_s.col(i) + rj * particles_.angular_velocity_rad_s.col(j)).cross(n);
+  const Eigen::Vector3d dv = particles_.velocity_m_s.col(i) - particles_.velocity_m_s.col(j);
+  const Eigen::Vector3d u =
+      dv + (ri * particles_.angular_velocity_rad_s.col(i) + rj * particles_.angular_velocity_rad_s.col(j)).cross(n);
   const double mi = particles_.mass_kg[i], mj = particles_.mass_kg[j];
-  const CollisionOutcome out = walton_collision(u, n, sphere_mobility(mi) + sphere_mobility(mj), sphere_law_,
-                                                restitution(u.dot(n), sphere_law_));
+  const double approach = dv.dot(n);
+  const CollisionOutcome out = walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj),
+                                                sphere_law_, restitution(approach, sphere_law_));
   const Eigen::Vector3d& p = out.impulse_N_s;
   const Eigen::Vector3d torque_arm = n.cross(p);
   particles_.velocity_m_s.col(i) += p / mi;
@@ -427,7 +496,7 @@ void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const Colli
   impact_J_ += out.impact_J;
   friction_J_ += out.friction_J;
   ++counter_[i];
-  unmark_near(i);
+  leave_host_sets(i);
   if (host_model_.has_infinite_mass()) {
     excitation_J_ += p.z() * host.v_m_s;  // the wall's work on the sphere
   } else if (p.z() != 0.0) {
@@ -446,10 +515,14 @@ void HardEngine::collide_wall(int i, EventKind wall) {
     n = wall == EventKind::bottom_cap ? -e_z : e_z;
   }
   const double r = particles_.radius_m[i];
-  const Eigen::Vector3d u = particles_.velocity_m_s.col(i) +
-                            (r * particles_.angular_velocity_rad_s.col(i)).cross(n) - host.v_m_s * e_z;
+  const Eigen::Vector3d dv = particles_.velocity_m_s.col(i) - host.v_m_s * e_z;
+  const Eigen::Vector3d u = dv + (r * particles_.angular_velocity_rad_s.col(i)).cross(n);
   const Mobility mobility = sphere_mobility(particles_.mass_kg[i]) + Mobility{0, 0, host_inverse_mass_1_kg()};
-  const CollisionOutcome out = walton_collision(u, n, mobility, wall_law_, restitution(u.dot(n), wall_law_));
+  // As predicted: the cap's gap rate ∓(v_z − v_h), the side wall's x·v in the plane.
+  const double approach = wall == EventKind::side_wall
+                              ? x.head<2>().dot(dv.head<2>()) / x.head<2>().norm()
+                              : n.z() * (particles_.velocity_m_s(2, i) - host.v_m_s);
+  const CollisionOutcome out = walton_collision(u, n, approach, mobility, wall_law_, restitution(approach, wall_law_));
   apply_host_impulse(i, n, out, host);
   if (wall == EventKind::side_wall) {
     predict(i);
@@ -462,10 +535,15 @@ void HardEngine::collide_rider(int i, int j) {
   bring_to_now(i);
   const HostState host = host_.at(t_s_);
   const double ri = particles_.radius_m[i];
-  const Eigen::Vector3d n = (position_now(j, host) - particles_.position_m.col(i)).normalized();
-  const Eigen::Vector3d u = particles_.velocity_m_s.col(i) +
-                            (ri * particles_.angular_velocity_rad_s.col(i)).cross(n) - host.v_m_s * e_z;
-  if (u.dot(n) > resting_.rest_speed_m_s) {
+  // dx and dv exactly as rider_contact computes them, so the approach agrees with the prediction.
+  Eigen::Vector3d dx = particles_.position_m.col(i) - particles_.position_m.col(j);
+  dx.z() -= host.z_m;
+  Eigen::Vector3d dv = particles_.velocity_m_s.col(i);
+  dv.z() -= host.v_m_s;
+  const Eigen::Vector3d n = -dx.normalized();
+  const double approach = -dx.dot(dv) / dx.norm();
+  const Eigen::Vector3d u = dv + (ri * particles_.angular_velocity_rad_s.col(i)).cross(n);
+  if (approach > resting_.rest_speed_m_s) {
     // Hit hard enough to knock the rider off: it leaves the bed with the host's velocity
     // (no momentum changes hands) and the collision is between two free spheres.
     ++stats_.knocked_off;
@@ -475,7 +553,7 @@ void HardEngine::collide_rider(int i, int j) {
     return;
   }
   const Mobility mobility = sphere_mobility(particles_.mass_kg[i]) + Mobility{0, 0, host_inverse_mass_1_kg()};
-  const CollisionOutcome out = walton_collision(u, n, mobility, sphere_law_, restitution(u.dot(n), sphere_law_));
+  const CollisionOutcome out = walton_collision(u, n, approach, mobility, sphere_law_, restitution(approach, sphere_law_));
   apply_host_impulse(i, n, out, host);
   rest_if_slow(i, -n, host_.at(t_s_));
 }
@@ -511,25 +589,36 @@ double HardEngine::rider_energy_J(const HostState& host) const {
 }
 
 void HardEngine::restart_host(HostState start) {
+  ++stats_.host_impulses;
   book_host(t_s_);
+  const double velocity_change = std::abs(start.v_m_s - host_.at(t_s_).v_m_s);
+  const double mass_change = std::abs(riding_mass_kg_ - trajectory_riding_mass_kg_);
+  const double old_acceleration_bound = host_.acceleration_bound_m_s2();
   host_ = HostTrajectory(host_model_, t_s_, start, riding_mass_kg_, riding_mass_kg_ * gravity_m_s2_.z());
+  trajectory_riding_mass_kg_ = riding_mass_kg_;
   ++host_epoch_;
   if (host_.speed_bound_m_s() > host_speed_envelope_m_s_) {
     host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
     rebuild_predictions();
     return;
   }
-  std::size_t kept = 0;
-  for (const int i : near_list_) {
-    if (near_state_[i] == 1) {
-      near_list_[kept++] = i;
-      ++stats_.near_repredictions;
-      predict_host_relative(i);
-    } else {
-      near_state_[i] = 0;
-    }
+  if (!host_model_.has_infinite_mass()) {
+    // The new trajectory minus the old one solves the host's equation with initial
+    // velocity Δv and a force Δm (g_z − z_h''), so within τ it strays by at most
+    // |Δv| τ + ½ Δm (|g_z| + |z_h''|max) / M_new τ².
+    const double tau = host_horizon_s_;
+    const double acceleration_change = mass_change * (std::abs(gravity_m_s2_.z()) + old_acceleration_bound) /
+                                       (host_model_.mass_kg() + riding_mass_kg_);
+    deviation_budget_m_ += velocity_change * tau + 0.5 * acceleration_change * tau * tau;
   }
-  near_list_.resize(kept);
+  if (deviation_budget_m_ >= host_margin_m_) {
+    sweep_near();
+  } else {
+    imminent_.sweep([this](int i) {
+      ++stats_.imminent_repredictions;
+      predict_host_relative(i);
+    });
+  }
   predict_bed_release();
 }
 
@@ -571,8 +660,9 @@ void HardEngine::attach(int i) {
     impact_J_ += 0.5 * m * carried / (m + carried) * relative_vz * relative_vz;
     after.v_m_s = (carried * host.v_m_s + m * v.z()) / (carried + m);
   }
+  const Eigen::Vector3d lab_position = particles_.position_m.col(i);
   free_cells_.remove(i);
-  unmark_near(i);
+  leave_host_sets(i);
   ++counter_[i];
   riding_[i] = 1;
   const Eigen::Vector3d host_frame = particles_.position_m.col(i) - host.z_m * e_z;
@@ -587,7 +677,11 @@ void HardEngine::attach(int i) {
   const bool deeper = depth > bed_depth_bound_m_;
   if (deeper) bed_depth_bound_m_ = depth + grid_.cell_size_m();
   restart_host(after);
-  if (deeper) rebuild_predictions();
+  if (deeper) {
+    rebuild_predictions();
+  } else {
+    repredict_near_around(lab_position);
+  }
 }
 
 void HardEngine::detach(int i, const HostState& host) {

@@ -39,9 +39,11 @@ struct CollisionOutcome {
 
 /// The impulse of one collision. `relative_velocity` is the first body's contact point
 /// velocity minus the partner's, `normal` the unit vector from the first body towards
-/// the partner; the bodies approach when relative_velocity·normal > 0 (otherwise the
-/// outcome is zero). `restitution` is the e_n to use (the law's, or 1 for an elastic
-/// collision).
+/// the partner, `approach_speed` its normal component (> 0 when the bodies approach,
+/// otherwise the outcome is zero). The caller computes it from the centres' velocities
+/// exactly as the event prediction did, so that round-off in the rotation's normal part
+/// can never turn a predicted contact into a non-event. `restitution` is the e_n to use
+/// (the law's, or 1 for an elastic collision).
 ///
 /// Sticking: the impulse that reverses the normal relative velocity times e_n and the
 /// tangential one times β0. If its tangential part exceeds μ times its normal part the
@@ -50,7 +52,8 @@ struct CollisionOutcome {
 /// any e_n, μ ≥ 0 and β0 ∈ [−1, 1]; the loss is split exactly into the work of the normal
 /// and of the tangential impulse at the mean of the pre- and post-collision velocities.
 CollisionOutcome walton_collision(const Eigen::Vector3d& relative_velocity, const Eigen::Vector3d& normal,
-                                  const Mobility& mobility, const HardContactLaw& law, double restitution);
+                                  double approach_speed, const Mobility& mobility, const HardContactLaw& law,
+                                  double restitution);
 
 /// K·p for the mobility above.
 Eigen::Vector3d apply_mobility(const Mobility& mobility, const Eigen::Vector3d& normal, const Eigen::Vector3d& p);

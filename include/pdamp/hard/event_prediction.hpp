@@ -77,14 +77,15 @@ Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound,
 }
 
 /// The first contact of a free sphere with the bottom or top cap of a cavity of height
-/// `height_m` moving with `host`, searched on [t0, t1].
+/// `height_m` moving with `host` (whose state at t0 the caller has at hand), on [t0, t1].
 Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double height_m, const HostTrajectory& host,
-                     const Eigen::Vector3d& g, double t0, double t1, double tolerance_m);
+                     const HostState& host_at_t0, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m);
 
 /// The first contact of a free sphere with a sphere riding on the host at host-frame
 /// position `rider_m` (lab position rider_m + z_host e_z), contact distance σ, on [t0, t1].
 Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, double contact_distance_m,
-                       const HostTrajectory& host, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m);
+                       const HostTrajectory& host, const HostState& host_at_t0, const Eigen::Vector3d& g, double t0,
+                       double t1, double tolerance_m);
 
 /// The first contact with the side wall (the centre reaching distance `reach_m` = R − r
 /// from the axis) on [t0, t1].

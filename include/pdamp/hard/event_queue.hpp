@@ -16,7 +16,8 @@ enum class EventKind : std::uint8_t {
   top_cap,        ///< ... the top cap
   rider,          ///< a free sphere reaches a sphere riding with the host
   cell_crossing,  ///< a free sphere crosses a face of its cell; j = face (see HardEngine::Face)
-  host_check,     ///< a free sphere may come within reach of the host's walls or bed: predict exactly
+  host_check,     ///< a free sphere may come within reach of the host's walls or bed (speed envelope)
+  host_margin,    ///< a near sphere comes within the margin of a cap or rider, or its host horizon ends
   bed_release,    ///< the host's acceleration stops pressing the riding spheres against their cap
 };
 
@@ -25,7 +26,7 @@ struct Event {
   std::int32_t i;          ///< the particle (unused for bed_release)
   std::int32_t j;          ///< the partner particle, or the crossed face
   std::uint32_t count_i;   ///< i's trajectory counter when predicted
-  std::uint32_t count_j;   ///< j's trajectory counter (sphere_sphere) or the host epoch (host-dependent events)
+  std::uint32_t count_j;   ///< j's counter (sphere_sphere), host epoch (exact host-dependent events) or sweep generation (host_margin)
   EventKind kind;
 };
 

@@ -9,10 +9,17 @@
 /// predicts the involved spheres' next events.
 ///
 /// Host-dependent predictions (caps, riding spheres) go out of date whenever the host's
-/// motion changes. Only spheres in the "near-host set" carry such exact predictions;
-/// every other sphere carries a `host_check` at the earliest time it could reach a cap
-/// or the resting bed if the host moved as fast as `host_speed_envelope_` allows, which
-/// stays valid across host impulses. A host impulse therefore costs O(|near set|), not O(N).
+/// motion changes; three tiers keep that from costing O(N) per host impulse:
+/// - far: a `host_check` at the earliest time the sphere could reach a cap or the bed
+///   if the host moved as fast as `host_speed_envelope_` allows; valid across impulses.
+/// - near (its check has fired): a `host_margin` event when the sphere comes within
+///   `host_margin_m_` of a cap or rider on the current host trajectory, or at the end of
+///   its host horizon τ. That is a lower bound on the contact time as long as the host
+///   deviates from the trajectory it was computed with by less than the margin; each
+///   impulse adds |Δv| τ + ½ Δa τ² to a deviation budget, and only when the budget
+///   reaches the margin are all near spheres predicted anew (a sweep). τ adapts so that
+///   sweeps come about once per τ, which minimises the sum of the two costs.
+/// - imminent (within the margin): exact contact predictions, redone at every impulse.
 ///
 /// Resting: a sphere that leaves the floor, the top cap or a riding sphere slower than
 /// hard.rest_speed_m_s while the host's acceleration presses it there stops and rides
@@ -27,6 +34,7 @@
 #include "pdamp/hard/collision_rules.hpp"
 #include "pdamp/hard/event_prediction.hpp"
 #include "pdamp/hard/event_queue.hpp"
+#include "pdamp/hard/particle_set.hpp"
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/cell_grid.hpp"
 #include "pdamp/model/engine.hpp"
@@ -69,9 +77,18 @@ class HardEngine final : public Engine {
   void predict(int i);
   void predict_host_relative(int i);
   void predict_bed_release();
-  void mark_near(int i);
-  void unmark_near(int i);
+  void sweep_near();
+  void repredict_near_around(const Eigen::Vector3d& lab_position);
+  void leave_host_sets(int i);
   void rebuild_predictions();
+  struct HostContact {
+    Approach when;
+    EventKind kind;
+    int partner;
+  };
+  /// The first contact of free sphere i, grown by `margin_m`, with a cap or rider, from
+  /// now until `end_s` (or the end of the riders' window).
+  HostContact host_contact(int i, double end_s, double margin_m) const;
   bool is_current(const Event& event) const;
 
   // Events.
@@ -109,19 +126,27 @@ class HardEngine final : public Engine {
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint8_t> riding_;
-  std::vector<std::uint8_t> near_state_;  ///< 0 out of the near set, 1 in it, 2 listed but left
-  std::vector<int> near_list_;
+  ParticleSet near_;      ///< free spheres whose host_check has fired
+  ParticleSet imminent_;  ///< near spheres within the margin: exact host-dependent predictions
 
   CellGrid grid_;            ///< lab frame, for free spheres; the host frame uses the same geometry
   CellMembers free_cells_;   ///< free spheres by lab cell
   CellMembers rider_cells_;  ///< riding spheres by host-frame cell
   EventQueue queue_;
   double contact_tolerance_m_;
+  std::int64_t events_at_this_instant_ = 0;
+  std::int64_t stall_limit_;
 
   // Host.
   HostTrajectory host_;
   std::uint32_t host_epoch_ = 0;
   double host_speed_envelope_m_s_ = 0.0;  ///< ≥ the speed bound of every trajectory since the last rebuild
+  double host_margin_m_;                  ///< near spheres get exact predictions within this gap
+  double host_horizon_s_;                 ///< τ: how far ahead a near sphere's margin prediction looks
+  double deviation_budget_m_ = 0.0;       ///< how far the host may have strayed from any margin prediction
+  double t_last_sweep_s_ = 0.0;
+  std::uint32_t sweep_generation_ = 0;
+  double trajectory_riding_mass_kg_ = 0.0;  ///< the riding mass host_ was built with
   double t_s_ = 0.0;
   double t_host_booked_s_ = 0.0;
   double riding_mass_kg_ = 0.0;
@@ -134,7 +159,8 @@ class HardEngine final : public Engine {
 
   struct Statistics {
     std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
-                 stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, near_repredictions = 0, rebuilds = 0;
+                 host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, host_impulses = 0,
+                 imminent_repredictions = 0, near_sweeps = 0, near_repredictions = 0, rebuilds = 0;
   } stats_;
 };
 

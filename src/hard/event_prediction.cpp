@@ -18,7 +18,7 @@ double time_to_close(double gap, double rate, double accel) {
 
 double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m) {
   const double b = dx.dot(dv);
-  if (b >= 0) return never;
+  if (b >= -min_approach_speed_m_s * contact_distance_m) return never;
   const double c = dx.squaredNorm() - contact_distance_m * contact_distance_m;
   if (c <= 0) return 0.0;
   const double discriminant = b * b - dv.squaredNorm() * c;
@@ -36,7 +36,8 @@ Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double 
     const double z = flight.position_at(t, g).z(), vz = flight.velocity_at(t, g).z();
     return GapSample{sign * (z - h.z_m) - offset, sign * (vz - h.v_m_s)};
   };
-  return earliest_contact(gap, t0, t1, std::abs(g.z()) + host.acceleration_bound_m_s2(), tolerance_m);
+  return earliest_contact(gap, t0, t1, std::abs(g.z()) + host.acceleration_bound_m_s2(), tolerance_m,
+                          min_approach_speed_m_s);
 }
 
 Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, double contact_distance_m,
@@ -59,7 +60,7 @@ Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, 
     const double distance = dx.norm();
     return GapSample{distance - contact_distance_m, dx.dot(dv) / distance};
   };
-  return earliest_contact(gap, t0, t1, curvature, tolerance_m);
+  return earliest_contact(gap, t0, t1, curvature, tolerance_m, min_approach_speed_m_s);
 }
 
 Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0, double t1,
@@ -71,9 +72,12 @@ Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen:
     const double a = v.squaredNorm(), b = p.dot(v), c = p.squaredNorm() - reach_m * reach_m;
     if (a == 0.0) return {t1, false};
     const double root = std::sqrt(std::max(b * b - a * c, 0.0));
+    const double closing = min_approach_speed_m_s * reach_m;  // p·v of the slowest approach that counts
     double s;
     if (c >= 0) {
-      s = b >= 0 ? 0.0 : -2.0 * b / a;  // touching: now if moving out, else when it comes back
+      // Touching: now if moving out, when it comes back if moving in, and if sliding
+      // along the wall when p·v = b + a s grows past the threshold.
+      s = b > closing ? 0.0 : b < 0 ? -2.0 * b / a : (closing - b) / a;
     } else {
       s = b > 0 ? -c / (b + root) : (root - b) / a;
     }
@@ -85,7 +89,8 @@ Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen:
     const Eigen::Vector2d p = flight.position_at(t, g).head<2>(), v = flight.velocity_at(t, g).head<2>();
     return GapSample{reach_m * reach_m - p.squaredNorm(), -2.0 * p.dot(v)};
   };
-  return earliest_contact(gap, t0, t1, 2.0 * (speed * speed + reach_m * g_xy.norm()), 2.0 * reach_m * tolerance_m);
+  return earliest_contact(gap, t0, t1, 2.0 * (speed * speed + reach_m * g_xy.norm()), 2.0 * reach_m * tolerance_m,
+                          2.0 * reach_m * min_approach_speed_m_s);
 }
 
 Approach host_acceleration_crossing(const HostTrajectory& host, double level_m_s2, bool from_above, double t0,

@@ -38,6 +38,8 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial)
       counter_(initial.size(), 0),
       cell_(initial.size()),
       t_cross_s_(initial.size(), never),
+      host_stamp_(initial.size(), 0),
+      last_collision_s_(initial.size(), -never),
       riding_(initial.size(), 0),
       near_(static_cast<int>(initial.size())),
       imminent_(static_cast<int>(initial.size())),
@@ -45,6 +47,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial)
       free_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
+      max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
   host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
   host_margin_m_ = host_margin_fraction * initial.radius_m.minCoeff();
@@ -213,11 +216,10 @@ bool HardEngine::is_current(const Event& e) const {
     case EventKind::host_check:
       return counter_[e.i] == e.count_i;
     case EventKind::host_margin:
-      return counter_[e.i] == e.count_i && sweep_generation_ == e.count_j;
     case EventKind::bottom_cap:
     case EventKind::top_cap:
     case EventKind::rider:
-      return counter_[e.i] == e.count_i && host_epoch_ == e.count_j;
+      return counter_[e.i] == e.count_i && host_stamp_[e.i] == e.count_j;
     case EventKind::bed_release:
       break;
   }
@@ -275,6 +277,7 @@ void HardEngine::predict(int i) {
   }
 
   // Caps and the resting bed: a guard from the host's speed envelope, or exact predictions.
+  ++host_stamp_[i];  // whatever host-dependent event i had is replaced
   const HostState host = host_.at(t);
   const double envelope = host_speed_envelope_m_s_;
   const double to_floor = time_to_close(x.z() - r - host.z_m - bed_depth_bound_m_, v.z() - envelope, g.z());
@@ -294,18 +297,19 @@ void HardEngine::predict_host_relative(int i) {
   const double t = t_s_;
   const double horizon = t_cross_s_[i];
   const double end = std::min(horizon, t + host_horizon_s_);
+  const std::uint32_t stamp = ++host_stamp_[i];
   const HostContact margin = host_contact(i, end, host_margin_m_);
   if (!(margin.when.contact && margin.when.t_s <= t)) {
     imminent_.erase(i);
-    if (margin.when.t_s < horizon) push({margin.when.t_s, i, 0, counter_[i], sweep_generation_, EventKind::host_margin});
+    if (margin.when.t_s < horizon) push({margin.when.t_s, i, 0, counter_[i], stamp, EventKind::host_margin});
     return;
   }
   imminent_.insert(i);
   const HostContact exact = host_contact(i, end, 0.0);
   if (exact.when.contact) {
-    push({exact.when.t_s, i, exact.partner, counter_[i], host_epoch_, exact.kind});
+    push({exact.when.t_s, i, exact.partner, counter_[i], stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
-    push({exact.when.t_s, i, 0, counter_[i], sweep_generation_, EventKind::host_margin});
+    push({exact.when.t_s, i, 0, counter_[i], stamp, EventKind::host_margin});
   }
 }
 
@@ -324,20 +328,22 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   consider(cap_contact(f, r + margin_m, true, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_),
            EventKind::top_cap, 0);
   if (riding_count_ == 0) return best;
-  // Riders that the sphere can reach before the host moves one cell: the sphere stays in
-  // its lab cell, the host within a cell of where it is now, so the riders' host-frame
-  // heights lie within the window below.
+  // Riders within reach of the sphere's host-frame path until the host has moved at most
+  // a cell: a box around the path, widened by the largest contact distance.
   const double cell = grid_.cell_size_m();
   const double host_speed = host_.speed_bound_m_s();
   const double window_end = host_speed > 0 ? std::min(end_s, t + cell / host_speed) : end_s;
-  const double lab_floor = grid_.z_lower_m(cell_[i].iz);
+  const double span = window_end - t;
+  Eigen::Vector3d centre = f.position_at(t, gravity_m_s2_);
+  centre.z() -= host.z_m;
+  Eigen::Vector3d half = f.velocity_at(t, gravity_m_s2_).cwiseAbs() * span + 0.5 * gravity_m_s2_.cwiseAbs() * span * span;
+  half.array() += r + max_radius_m_ + margin_m;
+  half.z() += host_speed * span;
+  const CellCoord low = grid_.coord_of(centre - half), high = grid_.coord_of(centre + half);
   const int top_layer = static_cast<int>(std::floor(height / cell));
-  const int lowest = std::max(0, static_cast<int>(std::floor((lab_floor - host.z_m - 2.0 * cell) / cell)));
-  const int highest = std::min(top_layer, static_cast<int>(std::floor((lab_floor - host.z_m + 3.0 * cell) / cell)));
-  const CellCoord c = cell_[i];
-  for (int iz = lowest; iz <= highest; ++iz) {
-    for (int iy = std::max(0, c.iy - 1); iy <= std::min(grid_.ny() - 1, c.iy + 1); ++iy) {
-      for (int ix = std::max(0, c.ix - 1); ix <= std::min(grid_.nx() - 1, c.ix + 1); ++ix) {
+  for (int iz = std::max(0, low.iz); iz <= std::min(top_layer, high.iz); ++iz) {
+    for (int iy = low.iy; iy <= high.iy; ++iy) {
+      for (int ix = low.ix; ix <= high.ix; ++ix) {
         rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
           consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j] + margin_m, host_, host,
                                  gravity_m_s2_, t, window_end, contact_tolerance_m_),
@@ -365,13 +371,13 @@ void HardEngine::leave_host_sets(int i) {
 }
 
 void HardEngine::sweep_near() {
-  // τ = √(τ · time since the last sweep) balances sweeps against horizon ends.
+  // τ → √(τ · time since the last sweep) balances sweeps against horizon ends; it moves
+  // at most fourfold per sweep and stays between 10⁻³ and 1 radian of the host's fastest rate.
   const double since = t_s_ - t_last_sweep_s_;
-  host_horizon_s_ = std::clamp(std::sqrt(host_horizon_s_ * since), 1e-9 / fastest_host_rate_1_s_,
-                               1.0 / fastest_host_rate_1_s_);
+  const double balanced = std::clamp(std::sqrt(host_horizon_s_ * since), 0.25 * host_horizon_s_, 4.0 * host_horizon_s_);
+  host_horizon_s_ = std::clamp(balanced, 1e-3 / fastest_host_rate_1_s_, 1.0 / fastest_host_rate_1_s_);
   t_last_sweep_s_ = t_s_;
   deviation_budget_m_ = 0.0;
-  ++sweep_generation_;
   ++stats_.near_sweeps;
   near_.sweep([this](int i) {
     near_.insert(i);
@@ -399,7 +405,6 @@ void HardEngine::rebuild_predictions() {
   ++stats_.rebuilds;
   queue_.clear();
   ++host_epoch_;
-  ++sweep_generation_;
   deviation_budget_m_ = 0.0;
   near_.clear();
   imminent_.clear();
@@ -454,8 +459,13 @@ void HardEngine::handle(const Event& e) {
   }
 }
 
-double HardEngine::restitution(double approach_speed_m_s, const HardContactLaw& law) const {
-  return approach_speed_m_s < resting_.elastic_speed_m_s ? 1.0 : law.en;
+double HardEngine::restitution(double approach_speed_m_s, const HardContactLaw& law, int i, int j) {
+  // A sphere wedged between two bodies collides again at the same instant; keeping those
+  // repeats inelastic lets the sequence die out instead of bouncing elastically forever.
+  const bool repeat = last_collision_s_[i] == t_s_ || (j >= 0 && last_collision_s_[j] == t_s_);
+  last_collision_s_[i] = t_s_;
+  if (j >= 0) last_collision_s_[j] = t_s_;
+  return approach_speed_m_s < resting_.elastic_speed_m_s && !repeat ? 1.0 : law.en;
 }
 
 void HardEngine::collide_spheres(int i, int j) {
@@ -469,7 +479,7 @@ void HardEngine::collide_spheres(int i, int j) {
   const double mi = particles_.mass_kg[i], mj = particles_.mass_kg[j];
   const double approach = dv.dot(n);
   const CollisionOutcome out = walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj),
-                                                sphere_law_, restitution(approach, sphere_law_));
+                                                sphere_law_, restitution(approach, sphere_law_, i, j));
   const Eigen::Vector3d& p = out.impulse_N_s;
   const Eigen::Vector3d torque_arm = n.cross(p);
   particles_.velocity_m_s.col(i) += p / mi;
@@ -522,13 +532,31 @@ void HardEngine::collide_wall(int i, EventKind wall) {
   const double approach = wall == EventKind::side_wall
                               ? x.head<2>().dot(dv.head<2>()) / x.head<2>().norm()
                               : n.z() * (particles_.velocity_m_s(2, i) - host.v_m_s);
-  const CollisionOutcome out = walton_collision(u, n, approach, mobility, wall_law_, restitution(approach, wall_law_));
+  const CollisionOutcome out =
+      walton_collision(u, n, approach, mobility, wall_law_, restitution(approach, wall_law_, i, -1));
   apply_host_impulse(i, n, out, host);
   if (wall == EventKind::side_wall) {
+    turn_along_side_wall(i, n);
     predict(i);
   } else {
     rest_if_slow(i, -n, host_.at(t_s_));
   }
+}
+
+void HardEngine::turn_along_side_wall(int i, const Eigen::Vector3d& outward) {
+  // A sphere sliding along the curved wall would bounce ever more often as its radial
+  // speed dies out (chords ∝ radial speed). It leaves at least at the elastic speed
+  // instead, its horizontal speed unchanged: the wall turns it as a lasting contact
+  // would, without changing its energy.
+  const double floor_speed = resting_.elastic_speed_m_s;
+  Eigen::Vector2d v = particles_.velocity_m_s.col(i).head<2>();
+  const Eigen::Vector2d radial = outward.head<2>();
+  const double leaving = -v.dot(radial);
+  const double speed_sq = v.squaredNorm();
+  if (leaving >= floor_speed || speed_sq <= floor_speed * floor_speed) return;
+  const Eigen::Vector2d along = (v + leaving * radial).normalized();
+  v = -floor_speed * radial + std::sqrt(speed_sq - floor_speed * floor_speed) * along;
+  particles_.velocity_m_s.col(i).head<2>() = v;
 }
 
 void HardEngine::collide_rider(int i, int j) {
@@ -553,7 +581,8 @@ void HardEngine::collide_rider(int i, int j) {
     return;
   }
   const Mobility mobility = sphere_mobility(particles_.mass_kg[i]) + Mobility{0, 0, host_inverse_mass_1_kg()};
-  const CollisionOutcome out = walton_collision(u, n, approach, mobility, sphere_law_, restitution(approach, sphere_law_));
+  const CollisionOutcome out =
+      walton_collision(u, n, approach, mobility, sphere_law_, restitution(approach, sphere_law_, i, -1));
   apply_host_impulse(i, n, out, host);
   rest_if_slow(i, -n, host_.at(t_s_));
 }

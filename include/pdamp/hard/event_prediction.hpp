@@ -19,6 +19,10 @@
 namespace pdamp::hard {
 
 inline constexpr double never = std::numeric_limits<double>::infinity();
+/// Bodies that approach slower than this are touching, not colliding: it keeps round-off
+/// in a velocity that a collision has just zeroed from scheduling another collision at
+/// the same instant (m/s).
+inline constexpr double min_approach_speed_m_s = 1e-12;
 
 /// A sphere's free flight from (x0, v0) at t0 under gravity g.
 struct Ballistic {
@@ -53,21 +57,23 @@ struct GapSample {
   double rate;
 };
 
-/// The first t in [t0, t1] where gap(t) ≤ tolerance while closing, given |gap''| ≤
+/// The first t in [t0, t1] where gap(t) ≤ tolerance while closing faster than
+/// `min_closing_rate` (in the gap's units per second), given |gap''| ≤
 /// curvature_bound on [t0, t1]. Each step h keeps the lower bound
 /// gap + rate·h − ½·bound·h² ≥ 0, so no contact lies inside a step; near a contact the
 /// steps shrink quadratically (Newton from the safe side); past a grazing minimum they
 /// grow again. Steps are at least √(2·tolerance/bound), so an overlap is never deeper
 /// than `tolerance`.
 template <class Gap>
-Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound, double tolerance) {
+Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound, double tolerance,
+                          double min_closing_rate) {
   constexpr int max_steps = 200;
   const double bound = curvature_bound > 0 ? curvature_bound : std::numeric_limits<double>::min();
   const double min_step = std::sqrt(2.0 * tolerance / bound);
   double t = t0;
   for (int k = 0; k < max_steps && t < t1; ++k) {
     const GapSample s = gap(t);
-    if (s.value <= tolerance && s.rate < 0) return {t, true};
+    if (s.value <= tolerance && s.rate < -min_closing_rate) return {t, true};
     const double v = std::max(s.value, 0.0);
     const double root = std::sqrt(s.rate * s.rate + 2.0 * bound * v);
     const double h = s.rate < 0 ? 2.0 * v / (root - s.rate) : (s.rate + root) / bound;

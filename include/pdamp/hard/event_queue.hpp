@@ -26,7 +26,7 @@ struct Event {
   std::int32_t i;          ///< the particle (unused for bed_release)
   std::int32_t j;          ///< the partner particle, or the crossed face
   std::uint32_t count_i;   ///< i's trajectory counter when predicted
-  std::uint32_t count_j;   ///< j's counter (sphere_sphere), host epoch (exact host-dependent events) or sweep generation (host_margin)
+  std::uint32_t count_j;   ///< j's counter (sphere_sphere), i's host stamp (caps, rider, host_margin) or the host epoch (bed_release)
   EventKind kind;
 };
 

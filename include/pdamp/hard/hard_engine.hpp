@@ -70,7 +70,8 @@ class HardEngine final : public Engine {
   Eigen::Vector3d position_now(int i, const HostState& host) const;
   void bring_to_now(int i);
   double host_inverse_mass_1_kg() const;
-  double restitution(double approach_speed_m_s, const HardContactLaw& law) const;
+  /// e_n for a collision of i with j (−1 for a wall or rider), which also records its time.
+  double restitution(double approach_speed_m_s, const HardContactLaw& law, int i, int j);
 
   // Prediction.
   void push(const Event& event) { queue_.push(event); }
@@ -96,6 +97,7 @@ class HardEngine final : public Engine {
   void collide_spheres(int i, int j);
   void collide_wall(int i, EventKind wall);
   void collide_rider(int i, int j);
+  void turn_along_side_wall(int i, const Eigen::Vector3d& outward);
   void cross_face(int i, Face face);
   void release_bed();
 
@@ -125,6 +127,8 @@ class HardEngine final : public Engine {
   std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
+  std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
+  std::vector<double> last_collision_s_;
   std::vector<std::uint8_t> riding_;
   ParticleSet near_;      ///< free spheres whose host_check has fired
   ParticleSet imminent_;  ///< near spheres within the margin: exact host-dependent predictions
@@ -134,6 +138,7 @@ class HardEngine final : public Engine {
   CellMembers rider_cells_;  ///< riding spheres by host-frame cell
   EventQueue queue_;
   double contact_tolerance_m_;
+  double max_radius_m_;
   std::int64_t events_at_this_instant_ = 0;
   std::int64_t stall_limit_;
 
@@ -145,7 +150,6 @@ class HardEngine final : public Engine {
   double host_horizon_s_;                 ///< τ: how far ahead a near sphere's margin prediction looks
   double deviation_budget_m_ = 0.0;       ///< how far the host may have strayed from any margin prediction
   double t_last_sweep_s_ = 0.0;
-  std::uint32_t sweep_generation_ = 0;
   double trajectory_riding_mass_kg_ = 0.0;  ///< the riding mass host_ was built with
   double t_s_ = 0.0;
   double t_host_booked_s_ = 0.0;

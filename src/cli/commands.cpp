@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/model/host.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/run.hpp"
@@ -84,7 +85,9 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
   // Everything that can be wrong with the input is found before the store is touched.
   const Model model = parse_model(model_name);
   const Scenario scenario = load_scenario(request.file, request.overrides);
-  const Particles initial = place_particles(scenario.particles, scenario.cavity, scenario.host.z0_m);
+  // The cavity starts where the host starts (z0, or A sin(phi) for a prescribed host).
+  const Particles initial =
+      place_particles(scenario.particles, scenario.cavity, HostModel(scenario).initial_state().z_m);
   auto engine = make_engine(model, scenario, initial);
 
   RunStore store(db);

@@ -18,7 +18,7 @@ constexpr double cell_margin = 1.0 + 1e-6;
 constexpr double relative_contact_tolerance = 1e-10;
 /// Near spheres switch to exact host-dependent predictions within this gap, relative to
 /// the smallest radius: a wider margin means rarer sweeps but more imminent spheres.
-constexpr double host_margin_fraction = 0.1;
+constexpr double host_margin_fraction = 0.005;
 
 const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 

@@ -62,8 +62,8 @@ struct GapSample {
 /// curvature_bound on [t0, t1]. Each step h keeps the lower bound
 /// gap + rate·h − ½·bound·h² ≥ 0, so no contact lies inside a step; near a contact the
 /// steps shrink quadratically (Newton from the safe side); past a grazing minimum they
-/// grow again. Steps are at least √(2·tolerance/bound), so an overlap is never deeper
-/// than `tolerance`.
+/// grow again. Unless closing, steps are at least √(2·tolerance/bound), so an overlap is
+/// never deeper than about `tolerance`.
 template <class Gap>
 Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound, double tolerance,
                           double min_closing_rate) {
@@ -77,7 +77,9 @@ Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound,
     const double v = std::max(s.value, 0.0);
     const double root = std::sqrt(s.rate * s.rate + 2.0 * bound * v);
     const double h = s.rate < 0 ? 2.0 * v / (root - s.rate) : (s.rate + root) / bound;
-    t += std::max(h, min_step);
+    // Closing: the safe steps converge like Newton's. Touching without closing: the
+    // minimum step gets past the stagnation and dips at most `tolerance` below zero.
+    t += s.rate < -min_closing_rate ? h : std::max(h, min_step);
   }
   return {std::min(t, t1), false};
 }

@@ -1,0 +1,254 @@
+/// Walton's collision law and the event predictions of the hard-sphere engine, against
+/// hand-derived results and brute-force sampling.
+#include <doctest/doctest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "pdamp/hard/collision_rules.hpp"
+#include "pdamp/hard/event_prediction.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using namespace pdamp::hard;
+
+namespace {
+
+HardContactLaw law(double en, double mu, double beta0) { return {en, mu, beta0}; }
+
+/// The kinetic energy a collision removes: −(P·u + ½ P·K P).
+double total_loss(const CollisionOutcome& out, const Eigen::Vector3d& u, const Eigen::Vector3d& n, const Mobility& k) {
+  const Eigen::Vector3d& p = out.impulse_N_s;
+  return -(p.dot(u) + 0.5 * p.dot(apply_mobility(k, n, p)));
+}
+
+}  // namespace
+
+TEST_CASE("Walton: head-on frictionless impact of two spheres") {
+  const double m1 = 2e-6, m2 = 5e-6, e = 0.7, u_n = 0.9;
+  const Eigen::Vector3d n = Eigen::Vector3d(1, 2, 2) / 3.0;
+  const Mobility k = sphere_mobility(m1) + sphere_mobility(m2);
+  const CollisionOutcome out = walton_collision(u_n * n, n, u_n, k, law(e, 0.0, 0.35), e);
+  const double reduced = m1 * m2 / (m1 + m2);
+  CHECK((out.impulse_N_s + (1 + e) * reduced * u_n * n).norm() <= 1e-15 * reduced * u_n);
+  CHECK(out.impact_J == doctest::Approx(0.5 * (1 - e * e) * reduced * u_n * u_n).epsilon(1e-13));
+  CHECK(std::abs(out.friction_J) <= 1e-28);
+  // Separating bodies do not collide.
+  CHECK(walton_collision(-u_n * n, n, -u_n, k, law(e, 0.5, 0.35), e).impulse_N_s.norm() == 0.0);
+}
+
+TEST_CASE("Walton: a sticking oblique impact reverses the contact slip by beta0") {
+  const double m = 3e-6, e = 0.8, beta0 = 0.35, u_n = 0.5, u_t = 0.2;
+  const Eigen::Vector3d n = -Eigen::Vector3d::UnitZ();  // sphere falling on a fixed floor
+  const Eigen::Vector3d u(u_t, 0.0, -u_n);
+  const Mobility k = sphere_mobility(m);
+  const CollisionOutcome out = walton_collision(u, n, u_n, k, law(e, 10.0, beta0), e);
+  CHECK(out.sticking);
+  // P_t = −(1 + β0) u_t / (7/(2m)), P_n = (1 + e) m u_n.
+  CHECK(out.impulse_N_s.x() == doctest::Approx(-(1 + beta0) * u_t * 2 * m / 7).epsilon(1e-13));
+  CHECK(out.impulse_N_s.z() == doctest::Approx((1 + e) * m * u_n).epsilon(1e-13));
+  const Eigen::Vector3d u_after = u + apply_mobility(k, n, out.impulse_N_s);
+  CHECK(u_after.x() == doctest::Approx(-beta0 * u_t).epsilon(1e-13));
+  CHECK(u_after.z() == doctest::Approx(e * u_n).epsilon(1e-13));
+  CHECK(out.impact_J == doctest::Approx(0.5 * (1 - e * e) * m * u_n * u_n).epsilon(1e-13));
+  CHECK(out.friction_J == doctest::Approx(0.5 * (1 - beta0 * beta0) * (2 * m / 7) * u_t * u_t).epsilon(1e-13));
+}
+
+TEST_CASE("Walton: a sliding impact is limited by mu times the normal impulse") {
+  const double m = 3e-6, e = 0.6, mu = 0.1, u_n = 0.5, u_t = 0.4;
+  const Eigen::Vector3d n = -Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d u(0.0, u_t, -u_n);
+  const Mobility k = sphere_mobility(m);
+  const CollisionOutcome out = walton_collision(u, n, u_n, k, law(e, mu, 0.35), e);
+  CHECK_FALSE(out.sticking);
+  const double lambda = (1 + e) * m * u_n, p_t = mu * lambda;
+  CHECK(out.impulse_N_s.y() == doctest::Approx(-p_t).epsilon(1e-13));
+  CHECK(out.impulse_N_s.z() == doctest::Approx(lambda).epsilon(1e-13));
+  // Friction work: μλ|u_t| − ½ (7/(2m)) (μλ)².
+  CHECK(out.friction_J == doctest::Approx(p_t * u_t - 0.5 * 3.5 / m * p_t * p_t).epsilon(1e-13));
+  CHECK(out.impact_J + out.friction_J == doctest::Approx(total_loss(out, u, n, k)).epsilon(1e-13));
+}
+
+TEST_CASE("Walton: a finite host takes the normal impulse at a cap and the vertical friction at the side wall") {
+  const double m = 3e-6, host = 0.04, e = 0.8, beta0 = 0.35;
+  const Mobility k = sphere_mobility(m) + Mobility{0, 0, 1.0 / host};
+  SUBCASE("cap: the pair's effective mass") {
+    const Eigen::Vector3d n = -Eigen::Vector3d::UnitZ();
+    const double u_n = 1.3;
+    const CollisionOutcome out = walton_collision(Eigen::Vector3d(0, 0, -u_n), n, u_n, k, law(e, 0.5, beta0), e);
+    CHECK(out.impulse_N_s.z() == doctest::Approx((1 + e) * u_n / (1 / m + 1 / host)).epsilon(1e-13));
+  }
+  SUBCASE("side wall: the vertical slip sees 7/(2m) + 1/M") {
+    const Eigen::Vector3d n = Eigen::Vector3d::UnitX();
+    const double u_n = 0.3, u_z = 0.05;
+    const CollisionOutcome out = walton_collision(Eigen::Vector3d(u_n, 0, u_z), n, u_n, k, law(e, 10.0, beta0), e);
+    CHECK(out.sticking);
+    CHECK(out.impulse_N_s.z() == doctest::Approx(-(1 + beta0) * u_z / (3.5 / m + 1 / host)).epsilon(1e-13));
+    CHECK(out.impulse_N_s.x() == doctest::Approx(-(1 + e) * m * u_n).epsilon(1e-13));
+  }
+}
+
+TEST_CASE("Walton: the loss splits exactly into impact and friction and is never negative") {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    Eigen::Vector3d n(uniform(rng), uniform(rng), uniform(rng));
+    n.normalize();
+    Eigen::Vector3d u(uniform(rng), uniform(rng), uniform(rng));
+    if (u.dot(n) < 0) u = -u;
+    const double m = 1e-6 * (1.5 + uniform(rng));
+    const Mobility k = sphere_mobility(m) + Mobility{0, 0, trial % 2 ? 1.0 / (0.01 + 0.005 * uniform(rng)) : 0.0};
+    const HardContactLaw l = law(0.5 + 0.5 * uniform(rng), 0.6 + 0.5 * uniform(rng), uniform(rng));
+    const CollisionOutcome out = walton_collision(u, n, u.dot(n), k, l, l.en);
+    const double loss = total_loss(out, u, n, k);
+    CAPTURE(trial);
+    CHECK(out.impact_J + out.friction_J == doctest::Approx(loss).epsilon(1e-12));
+    CHECK(out.impact_J >= 0.0);
+    CHECK(loss >= -1e-15 * m * u.squaredNorm());
+    // Normal restitution holds exactly in both branches.
+    const Eigen::Vector3d u_after = u + apply_mobility(k, n, out.impulse_N_s);
+    CHECK(u_after.dot(n) == doctest::Approx(-l.en * u.dot(n)).epsilon(1e-10));
+  }
+}
+
+TEST_CASE("straight-line and quadratic event times") {
+  CHECK(time_to_close(1.0, -2.0, 0.0) == doctest::Approx(0.5));
+  CHECK(time_to_close(1.0, 0.0, -2.0) == doctest::Approx(1.0));
+  CHECK(time_to_close(1.0, 1.0, 0.0) == never);
+  CHECK(time_to_close(1.0, -1.0, 4.0) == never);  // turns back before reaching the plane
+  CHECK(time_to_close(-1e-18, -1.0, 0.0) == 0.0);  // round-off past the plane counts as touching
+  CHECK(time_to_close(0.0, 2.0, -1.0) == doctest::Approx(4.0));  // leaves and falls back
+  const double s = sphere_sphere_time(Eigen::Vector3d(3, 0, 0), Eigen::Vector3d(-1, 0, 0), 1.0);
+  CHECK(s == doctest::Approx(2.0));
+  CHECK(sphere_sphere_time(Eigen::Vector3d(3, 0, 0), Eigen::Vector3d(1, 0, 0), 1.0) == never);
+  CHECK(sphere_sphere_time(Eigen::Vector3d(3, 2, 0), Eigen::Vector3d(-1, 0, 0), 1.0) == never);  // misses
+}
+
+namespace {
+
+/// A prescribed host moving as z = A sin(ωt) (amplitude 0 for fixed walls).
+struct PrescribedHost {
+  Scenario scenario;
+  HostModel model;
+  HostTrajectory trajectory;
+  PrescribedHost(double amplitude_m, double frequency_hz)
+      : scenario(make(amplitude_m, frequency_hz)), model(scenario), trajectory(model, 0.0, model.initial_state()) {}
+  static Scenario make(double amplitude_m, double frequency_hz) {
+    Scenario s = test::scenario_from("[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 1\n");
+    s.excitation.amplitude_m = amplitude_m;
+    s.excitation.frequency_hz = frequency_hz;
+    return s;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("cap contacts under a fast host: never an earlier contact than the one found (adversarial)") {
+  const PrescribedHost host(0.002, 400.0);  // 5 m/s, 12 600 m/s²
+  const Eigen::Vector3d g(0, 0, -9.81);
+  const double r = 5e-4, height = 0.01, tolerance = 1e-14;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int contacts = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const double t0 = uniform(rng) * 0.01;
+    const HostState h0 = host.trajectory.at(t0);
+    // Gaps from 1e-12 m to a few mm, particle speeds up to 2 m/s either way.
+    const double gap = std::pow(10.0, -12.0 + 9.5 * uniform(rng));
+    const bool top = trial % 2 == 1;
+    const double z = top ? h0.z_m + height - r - gap : h0.z_m + r + gap;
+    const Ballistic flight{Eigen::Vector3d(0, 0, z), Eigen::Vector3d(0, 0, 4.0 * (uniform(rng) - 0.5)), t0};
+    const double t1 = t0 + 0.004;
+    const Approach found = cap_contact(flight, r, top, height, host.trajectory, h0, g, t0, t1, tolerance);
+    auto gap_at = [&](double t) {
+      const double zt = flight.position_at(t, g).z(), zh = host.trajectory.at(t).z_m;
+      return top ? zh + height - zt - r : zt - zh - r;
+    };
+    // Brute force: no sample before the found time has the spheres overlapping.
+    const int samples = 20000;
+    for (int k = 0; k < samples; ++k) {
+      const double t = t0 + (found.t_s - t0) * k / samples;
+      REQUIRE(gap_at(t) >= -tolerance);
+    }
+    if (found.contact) {
+      ++contacts;
+      CHECK(gap_at(found.t_s) <= tolerance);
+      CHECK(gap_at(found.t_s) >= -tolerance);
+    } else {
+      CHECK(found.t_s == t1);
+    }
+  }
+  CHECK(contacts > 100);
+}
+
+TEST_CASE("grazing: a path that just misses the floor is not a contact, one that just touches is") {
+  // Gravity pointing up: a sphere moving down at v towards a fixed floor decelerates and
+  // comes closest, gap0 − v²/2g, at t = v/g.
+  Scenario s = PrescribedHost::make(0.0, 1.0);
+  s.gravity_m_s2 = Eigen::Vector3d(0, 0, 9.81);
+  const HostModel model(s);
+  const HostTrajectory host(model, 0.0, model.initial_state());
+  const double r = 5e-4, tolerance = 1e-14, v = 0.3, g = 9.81, approach_depth = v * v / (2 * g);
+  for (const double minimum_gap : {3 * tolerance, 0.5 * tolerance, -0.5 * tolerance}) {
+    const Ballistic flight{Eigen::Vector3d(0, 0, r + approach_depth + minimum_gap), Eigen::Vector3d(0, 0, -v), 0.0};
+    const Approach found =
+        cap_contact(flight, r, false, 0.01, host, host.at(0.0), s.gravity_m_s2, 0.0, 0.1, tolerance);
+    CAPTURE(minimum_gap);
+    CHECK(found.contact == (minimum_gap <= tolerance));
+    if (found.contact) CHECK(found.t_s == doctest::Approx(v / g).epsilon(1e-3));
+  }
+}
+
+TEST_CASE("rider contacts: the first contact with a sphere riding on a fast host, checked by sampling") {
+  const PrescribedHost host(0.001, 200.0);
+  const Eigen::Vector3d g(0, 0, -9.81);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  const double sigma = 1e-3, tolerance = 1e-14;
+  int contacts = 0;
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::Vector3d rider(0, 0, 0.002);
+    const HostState h0 = host.trajectory.at(0.0);
+    Eigen::Vector3d offset(uniform(rng), uniform(rng), uniform(rng));
+    offset = offset.normalized() * (sigma + std::pow(10.0, -11.0 + 8.0 * (0.5 + 0.5 * uniform(rng))));
+    const Ballistic flight{rider + offset + h0.z_m * Eigen::Vector3d::UnitZ(),
+                           Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)), 0.0};
+    const Approach found = rider_contact(flight, rider, sigma, host.trajectory, h0, g, 0.0, 0.003, tolerance);
+    auto gap_at = [&](double t) {
+      return (flight.position_at(t, g) - rider - host.trajectory.at(t).z_m * Eigen::Vector3d::UnitZ()).norm() - sigma;
+    };
+    for (int k = 0; k < 5000; ++k) REQUIRE(gap_at(found.t_s * k / 5000) >= -tolerance);
+    if (found.contact) {
+      ++contacts;
+      CHECK(std::abs(gap_at(found.t_s)) <= tolerance);
+    }
+  }
+  CHECK(contacts > 50);
+}
+
+TEST_CASE("side wall under tilted gravity: the quartic's first root, checked by sampling") {
+  const Eigen::Vector3d g(3.0, -2.0, -9.0);
+  const double reach = 0.005, tolerance = 1e-14;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::Vector3d x(0.004 * uniform(rng), 0.003 * uniform(rng), 0.0);
+    const Ballistic flight{x, Eigen::Vector3d(0.3 * uniform(rng), 0.3 * uniform(rng), 0.0), 0.0};
+    const Approach found = side_wall_contact(flight, reach, g, 0.0, 0.2, tolerance);
+    auto gap_at = [&](double t) { return reach - flight.position_at(t, g).head<2>().norm(); };
+    for (int k = 0; k < 5000; ++k) REQUIRE(gap_at(found.t_s * k / 5000) >= -tolerance);
+    CHECK(found.contact);  // gravity pushes every sphere to the wall within 0.2 s
+    CHECK(std::abs(gap_at(found.t_s)) <= 2 * tolerance);
+  }
+}
+
+TEST_CASE("the host's acceleration crossing -g: the time the bed lifts off a sinusoidal floor") {
+  const double amplitude = 0.0005, frequency = 30.0, w = 2 * std::numbers::pi * frequency;
+  const PrescribedHost host(amplitude, frequency);
+  // z'' = −A ω² sin(ωt) first reaches −g at ωt = asin(g / (A ω²)).
+  const Approach lift = host_acceleration_crossing(host.trajectory, -9.81, true, 0.0, 0.02, 1e-9);
+  REQUIRE(lift.contact);
+  CHECK(lift.t_s == doctest::Approx(std::asin(9.81 / (amplitude * w * w)) / w).epsilon(1e-6));
+}

@@ -1,0 +1,301 @@
+/// The event-driven hard-sphere engine: conservation laws, the energy ledger, resting
+/// beds, determinism and the overlap invariant.
+#include <doctest/doctest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "pdamp/hard/hard_engine.hpp"
+#include "pdamp/model/placement.hpp"
+#include "pdamp/errors.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using hard::HardEngine;
+
+namespace {
+
+std::int64_t statistic(const Engine& engine, const std::string& name) {
+  for (const auto& [key, value] : engine.statistics()) {
+    if (key == name) return value;
+  }
+  FAIL("no statistic " << name);
+  return 0;
+}
+
+/// A scenario whose walls do not move: a prescribed host of zero amplitude.
+Scenario fixed_walls(const std::string& text) {
+  Scenario s = test::scenario_from(text + "\n[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 1\n");
+  s.excitation.amplitude_m = 0.0;
+  return s;
+}
+
+/// Spheres placed by the shared placement, with random velocities of one speed and random spins.
+/// The shared placement, with the cavity where the host starts.
+Particles placed(const Scenario& s) {
+  return place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m);
+}
+
+Particles moving_spheres(const Scenario& s, double speed_m_s, double spin_rad_s, std::uint64_t seed) {
+  Particles p = placed(s);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal;
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    const Eigen::Vector3d direction = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    p.velocity_m_s.col(i) = speed_m_s * direction;
+    p.angular_velocity_rad_s.col(i) = spin_rad_s * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  }
+  return p;
+}
+
+double kinetic_energy(const Particles& p) {
+  double e = 0;
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    e += 0.5 * p.mass_kg[i] * p.velocity_m_s.col(i).squaredNorm() +
+         0.5 * p.moment_of_inertia(i) * p.angular_velocity_rad_s.col(i).squaredNorm();
+  }
+  return e;
+}
+
+const std::string gas_text =
+    "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n"
+    "[particles]\ncount = 400\ndiameter_m = 0.001\ndensity_kg_m3 = 8000\n"
+    "[hard]\nen = 1\nmu = 0\n[hard_wall]\nen = 1\nmu = 0\n";
+
+}  // namespace
+
+TEST_CASE("elastic frictionless gas in a fixed cavity: energy conserved, velocities relax to Maxwell-Boltzmann") {
+  const Scenario s = fixed_walls(gas_text);
+  HardEngine engine(s, moving_spheres(s, 0.5, 0.0, 3));
+  const double e0 = kinetic_energy(engine.state().particles);
+  std::vector<double> components;
+  double t = 0.0;
+  while (engine.collisions() < 300000) {
+    t += 0.01;
+    engine.advance_to(t);
+    const Particles p = engine.state().particles;
+    CHECK(std::abs(kinetic_energy(p) - e0) <= 1e-12 * e0);
+    CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+    if (engine.collisions() > 50000) {
+      for (Eigen::Index i = 0; i < p.size(); ++i) {
+        for (int axis = 0; axis < 3; ++axis) components.push_back(p.velocity_m_s(axis, i));
+      }
+    }
+  }
+  // Started with one speed; a Maxwell-Boltzmann gas has Gaussian components:
+  // kurtosis 3 and 68.3 % within one standard deviation.
+  double second = 0, fourth = 0;
+  for (const double v : components) second += v * v, fourth += v * v * v * v;
+  second /= static_cast<double>(components.size());
+  fourth /= static_cast<double>(components.size());
+  CHECK(fourth / (second * second) == doctest::Approx(3.0).epsilon(0.05));
+  const double sigma = std::sqrt(second);
+  const auto inside = std::count_if(components.begin(), components.end(), [&](double v) { return std::abs(v) < sigma; });
+  CHECK(static_cast<double>(inside) / static_cast<double>(components.size()) == doctest::Approx(0.6827).epsilon(0.02));
+  CHECK(statistic(engine, "events_wall") > 0);
+  CHECK(statistic(engine, "events_cap") > 0);
+}
+
+TEST_CASE("vertical momentum of spheres and host is conserved by every kind of collision") {
+  // A free host with a negligible spring (its impulse over the run is below 1e-25 N s),
+  // no damper, no gravity: M v_h + Σ m v_z is constant whatever the spheres hit
+  // (caps: normal impulse; side wall: friction).
+  Scenario s = test::scenario_from(
+      "[host]\nmass_kg = 0.002\nstiffness_N_m = 1e-20\ndamping_N_s_m = 0\nz0_m = 0\nv0_m_s = 0.05\n"
+      "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.008\nheight_m = 0.006\n"
+      "[particles]\ncount = 40\ndiameter_m = 0.001\n[hard]\nen = 0.7\nmu = 0.4\nbeta0 = 0.3\n");
+  HardEngine engine(s, moving_spheres(s, 0.3, 200.0, 9));
+  auto momentum = [&] {
+    const State st = engine.state();
+    double p = s.host.mass_kg * st.observation.host.v_m_s;
+    for (Eigen::Index i = 0; i < st.particles.size(); ++i) p += st.particles.mass_kg[i] * st.particles.velocity_m_s(2, i);
+    return p;
+  };
+  const double p0 = momentum();
+  const double scale = s.host.mass_kg * 0.05 + 40 * 4e-6 * 0.3;
+  for (int k = 1; k <= 50; ++k) {
+    engine.advance_to(0.002 * k);
+    CHECK(std::abs(momentum() - p0) <= 1e-13 * scale);
+  }
+  CHECK(statistic(engine, "events_cap") > 50);
+  CHECK(statistic(engine, "events_wall") > 50);
+  CHECK(statistic(engine, "events_sphere_sphere") > 50);
+  CHECK(engine.observe().energy.balance_relative_error(0.0) >= 0.0);
+}
+
+TEST_CASE("angular momentum about the origin is conserved by a frictional sphere-sphere collision") {
+  Scenario s = fixed_walls("[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n"
+                           "[particles]\ncount = 2\ndiameter_m = 0.001\n[hard]\nen = 0.6\nmu = 0.3\nbeta0 = 0.4\n");
+  Particles p(2);
+  for (int i = 0; i < 2; ++i) {
+    p.radius_m[i] = 0.0005;
+    p.mass_kg[i] = 4e-6 * (1 + i);
+  }
+  p.position_m.col(0) = Eigen::Vector3d(-0.002, 0.0003, 0.01);
+  p.position_m.col(1) = Eigen::Vector3d(0.002, -0.0002, 0.0102);
+  p.velocity_m_s.col(0) = Eigen::Vector3d(0.5, 0.02, 0.01);
+  p.velocity_m_s.col(1) = Eigen::Vector3d(-0.4, 0.0, -0.03);
+  p.angular_velocity_rad_s.col(0) = Eigen::Vector3d(100, -50, 300);
+  p.angular_velocity_rad_s.col(1) = Eigen::Vector3d(-200, 80, 10);
+  auto angular_momentum = [](const Particles& q) {
+    Eigen::Vector3d l = Eigen::Vector3d::Zero();
+    for (Eigen::Index i = 0; i < q.size(); ++i) {
+      l += q.mass_kg[i] * q.position_m.col(i).cross(q.velocity_m_s.col(i)) +
+           q.moment_of_inertia(i) * q.angular_velocity_rad_s.col(i);
+    }
+    return l;
+  };
+  HardEngine engine(s, p);
+  const Eigen::Vector3d l0 = angular_momentum(engine.state().particles);
+  engine.advance_to(0.006);  // one collision, no wall reached
+  REQUIRE(statistic(engine, "events_sphere_sphere") == 1);
+  REQUIRE(statistic(engine, "events_wall") + statistic(engine, "events_cap") == 0);
+  const Particles after = engine.state().particles;
+  CHECK((angular_momentum(after) - l0).norm() <= 1e-15 * l0.norm());
+  CHECK(engine.observe().energy.dissipated_friction_J > 0.0);
+}
+
+TEST_CASE("energy ledger balances to 1e-9 for every excitation mode, with no overlaps") {
+  const std::vector<ScenarioOverrides> modes = {
+      {},
+      {"excitation.mode=prescribed", "excitation.amplitude_m=0.001", "excitation.frequency_hz=30"},
+      {"excitation.mode=base", "excitation.amplitude_m=0.002", "excitation.frequency_hz=22"},
+      {"excitation.mode=force", "excitation.force_N=2", "excitation.frequency_hz=15"},
+  };
+  for (const auto& mode : modes) {
+    CAPTURE(mode.empty() ? std::string("free") : mode[0]);
+    const Scenario s = load_scenario(test::scenario_file("small"), mode);
+    HardEngine engine(s, placed(s));
+    const double e0 = engine.observe().energy.stored_J();
+    double worst = 0;
+    for (int k = 1; k <= 100; ++k) {
+      engine.advance_to(0.001 * k);
+      worst = std::max(worst, engine.observe().energy.balance_relative_error(e0));
+      REQUIRE(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+    }
+    CHECK(worst <= 1e-9);
+    const EnergyLedger ledger = engine.observe().energy;
+    CHECK(ledger.dissipated_impact_J > 0);
+    CHECK(ledger.dissipated_friction_J > 0);
+  }
+}
+
+namespace {
+
+/// One sphere of diameter 2 mm dropped from `height_m` on a floor moving as z = A sin(ωt),
+/// with e_n = 0.3: a ball that bounces this inelastically chatters to rest on the floor
+/// in every cycle (the classic bouncing ball), which makes its lift-offs countable.
+struct BouncingBall {
+  Scenario scenario;
+  BouncingBall(double gamma, double frequency_hz, double height_m) {
+    const double w = 2 * std::numbers::pi * frequency_hz;
+    scenario = test::scenario_from("[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = " +
+                                   std::to_string(frequency_hz) +
+                                   "\n[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 1\n"
+                                   "diameter_m = 0.002\n[hard_wall]\nen = 0.3\n");
+    scenario.excitation.amplitude_m = gamma * 9.81 / (w * w);
+    drop_height_m = height_m;
+  }
+  double drop_height_m;
+  Particles ball() const {
+    Particles p(1);
+    p.radius_m[0] = 0.001;
+    p.mass_kg[0] = 1e-5;
+    p.position_m.col(0) = Eigen::Vector3d(0.0005, 0.0, 0.001 + drop_height_m);
+    p.velocity_m_s.col(0) = Eigen::Vector3d(0.01, 0.0, 0.0);
+    return p;
+  }
+};
+
+}  // namespace
+
+TEST_CASE("resting: a ball dropped on a floor vibrating below Gamma = 1 comes to rest and rides with it") {
+  const BouncingBall setup(0.5, 30.0, 0.005);
+  HardEngine engine(setup.scenario, setup.ball());
+  engine.advance_to(1.0);
+  CHECK(engine.riding_count() == 1);
+  const std::int64_t collisions = engine.collisions();
+  CHECK(collisions < 200);  // bounces die out geometrically, then it rides: no more events
+  engine.advance_to(3.0);
+  CHECK(engine.collisions() == collisions);
+  const State st = engine.state();
+  CHECK(st.particles.velocity_m_s(2, 0) == st.observation.host.v_m_s);
+  CHECK(st.particles.position_m(2, 0) == doctest::Approx(st.observation.host.z_m + 0.001).epsilon(1e-9));
+  CHECK(statistic(engine, "bed_releases") == 0);
+  const EnergyLedger e = engine.observe().energy;
+  CHECK(e.balance_relative_error(HardEngine(setup.scenario, setup.ball()).observe().energy.stored_J()) <= 1e-9);
+}
+
+TEST_CASE("resting: just above Gamma = 1 the ball lifts off the floor every cycle") {
+  const BouncingBall above(1.2, 30.0, 0.002);
+  HardEngine engine(above.scenario, above.ball());
+  engine.advance_to(1.0);
+  const std::int64_t releases = statistic(engine, "bed_releases");
+  engine.advance_to(2.0);
+  CHECK(statistic(engine, "bed_releases") - releases >= 20);  // 30 cycles in that second
+  CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+  const BouncingBall below(0.9, 30.0, 0.002);
+  HardEngine calm(below.scenario, below.ball());
+  calm.advance_to(2.0);
+  CHECK(statistic(calm, "bed_releases") == 0);
+  CHECK(calm.riding_count() == 1);
+}
+
+TEST_CASE("resting: a settled bed under Gamma < 1 rides with the host, which rings at sqrt(K/(M+m_p))/2pi, and a 10 s decay finishes") {
+  // 60 spheres (7.7 g) on the Table 1 host released from z0 = 0.5 mm: Gamma = z0 K/(M g) = 0.64.
+  const Scenario s = test::scenario_from(
+      "[host]\nz0_m = 0.0005\n[cavity]\ndiameter_m = 0.012\nheight_m = 0.01\n"
+      "[particles]\ncount = 60\ndiameter_m = 0.0015\n");
+  const Particles initial = placed(s);
+  HardEngine engine(s, initial);
+  engine.advance_to(2.0);
+  CHECK(engine.riding_count() == 60);
+  const std::int64_t settled_events = engine.collisions();
+  // Zero crossings of the host about the bed-loaded equilibrium over 2 .. 4 s.
+  const double m_p = initial.total_mass_kg();
+  const double equilibrium = m_p * s.gravity_m_s2.z() / s.host.stiffness_N_m;
+  std::vector<double> crossings;
+  double previous = engine.observe().host.z_m - equilibrium;
+  const double dt = 1e-4;
+  for (double t = 2.0 + dt; t <= 4.0; t += dt) {
+    engine.advance_to(t);
+    const double now = engine.observe().host.z_m - equilibrium;
+    if (previous < 0 && now >= 0) crossings.push_back(t - dt * now / (now - previous));
+    previous = now;
+  }
+  REQUIRE(crossings.size() >= 10);
+  const double measured = static_cast<double>(crossings.size() - 1) / (crossings.back() - crossings.front());
+  const double loaded = std::sqrt(s.host.stiffness_N_m / (s.host.mass_kg + m_p)) / (2 * std::numbers::pi);
+  CHECK(measured == doctest::Approx(loaded).epsilon(2e-3));
+  engine.advance_to(10.0);
+  CHECK(engine.collisions() - settled_events < 1000);
+  CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+}
+
+TEST_CASE("the same scenario and seed give bit-identical results") {
+  const Scenario s = load_scenario(test::scenario_file("small"), {"run.duration_s=0.05"});
+  const Particles initial = placed(s);
+  HardEngine a(s, initial), b(s, initial);
+  for (int k = 1; k <= 50; ++k) {
+    a.advance_to(0.001 * k);
+    b.advance_to(0.001 * k);
+    const Observation oa = a.observe(), ob = b.observe();
+    REQUIRE(oa.host.z_m == ob.host.z_m);
+    REQUIRE(oa.energy.dissipated_impact_J == ob.energy.dissipated_impact_J);
+    REQUIRE(oa.energy.dissipated_friction_J == ob.energy.dissipated_friction_J);
+  }
+  CHECK(a.state().particles.position_m == b.state().particles.position_m);
+  CHECK(a.statistics() == b.statistics());
+}
+
+TEST_CASE("overlapping initial spheres are refused") {
+  const Scenario s = fixed_walls("[particles]\ncount = 2\ndiameter_m = 0.001\n");
+  Particles p(2);
+  for (int i = 0; i < 2; ++i) p.radius_m[i] = 0.0005, p.mass_kg[i] = 1e-6;
+  p.position_m.col(0) = Eigen::Vector3d(0, 0, 0.002);
+  p.position_m.col(1) = Eigen::Vector3d(0.0009, 0, 0.002);
+  CHECK_THROWS_AS(HardEngine(s, p), InputError);
+}

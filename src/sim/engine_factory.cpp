@@ -2,6 +2,7 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/host_only_engine.hpp"
+#include "pdamp/soft/soft_engine.hpp"
 
 namespace pdamp {
 
@@ -16,6 +17,7 @@ Model parse_model(std::string_view text) {
 
 std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial) {
   if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
+  if (model == Model::soft) return std::make_unique<soft::SoftEngine>(scenario, initial);
   throw InputError("the " + std::string(to_string(model)) +
                    " engine is not built yet: only particles.count = 0 (the host alone) runs for now");
 }

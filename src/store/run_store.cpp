@@ -54,6 +54,16 @@ RunSummary read_summary(const sqlite::Statement& row) {
 
 }  // namespace
 
+std::string_view to_string(RunStatus status) {
+  switch (status) {
+    case RunStatus::running: return "running";
+    case RunStatus::completed: return "completed";
+    case RunStatus::failed: return "failed";
+    case RunStatus::interrupted: break;
+  }
+  return "interrupted";
+}
+
 RunStore::RunStore(const std::filesystem::path& file) : db_(file) {
   try {
     db_.exec("PRAGMA journal_mode = WAL");

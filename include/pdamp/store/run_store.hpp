@@ -11,11 +11,13 @@
 #include <vector>
 
 #include "pdamp/model/engine.hpp"
-#include "pdamp/sim/recorder.hpp"
-#include "pdamp/sim/run.hpp"
+#include "pdamp/analysis/recorder.hpp"
 #include "pdamp/store/sqlite.hpp"
 
 namespace pdamp {
+
+enum class RunStatus { running, completed, failed, interrupted };
+std::string_view to_string(RunStatus status);
 
 struct NewRun {
   std::string model;  ///< "soft" or "hard"

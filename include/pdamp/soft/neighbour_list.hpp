@@ -1,0 +1,45 @@
+#pragma once
+/// Verlet neighbour list with a skin, built on the shared cell grid. Every pair closer
+/// than r_i + r_j + skin is listed (half list: i < j, partners ascending), so no contact
+/// can be missed until some sphere has moved more than skin/2 relative to the host since
+/// the build — the engine rebuilds before that. Each listed pair carries its contact
+/// history, which a rebuild hands over to the new list.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "pdamp/model/cell_grid.hpp"
+#include "pdamp/soft/contact_law.hpp"
+
+namespace pdamp::soft {
+
+class NeighbourList {
+ public:
+  NeighbourList(const CellGrid& grid, double skin_m) : grid_(grid), skin_m_(skin_m) {}
+
+  /// Lists the pairs within reach of `positions`, keeping the histories of pairs that
+  /// stay listed.
+  void rebuild(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& radii);
+
+  double skin_m() const { return skin_m_; }
+  int size() const { return static_cast<int>(partner_.size()); }
+  /// Pairs of particle i are [first(i), first(i + 1)).
+  int first(int i) const { return first_[i]; }
+  int partner(int k) const { return partner_[k]; }
+  ContactHistory& history(int k) { return history_[k]; }
+  const ContactHistory& history(int k) const { return history_[k]; }
+  long long rebuilds() const { return rebuilds_; }
+
+ private:
+  CellGrid grid_;
+  double skin_m_;
+  CellList cells_;
+  Eigen::Matrix3Xd cell_positions_;
+  std::vector<int> first_, partner_;
+  std::vector<ContactHistory> history_;
+  std::vector<int> next_first_, next_partner_;
+  std::vector<ContactHistory> next_history_;
+  long long rebuilds_ = 0;
+};
+
+}  // namespace pdamp::soft

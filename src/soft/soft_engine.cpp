@@ -1,0 +1,297 @@
+#include "pdamp/soft/soft_engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "pdamp/errors.hpp"
+#include "pdamp/soft/time_step.hpp"
+
+namespace pdamp::soft {
+namespace {
+
+constexpr int side = 0, bottom = 1, top = 2;
+
+CellGrid make_grid(const Scenario& scenario, const Particles& particles, double skin_m) {
+  return CellGrid(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * particles.max_radius_m() + skin_m);
+}
+
+}  // namespace
+
+SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftEngineOptions options)
+    : scenario_(scenario),
+      options_(options),
+      host_model_(scenario),
+      cavity_(scenario.cavity),
+      dt_s_(choose_time_step_s(scenario)),
+      neighbours_(make_grid(scenario, initial, options.skin_fraction * 2.0 * initial.max_radius_m()),
+                  options.skin_fraction * 2.0 * initial.max_radius_m()) {
+  const auto n = static_cast<std::size_t>(initial.size());
+  x_.resize(n);
+  v_.resize(n);
+  w_.resize(n);
+  force_.assign(n, Eigen::Vector3d::Zero());
+  torque_.assign(n, Eigen::Vector3d::Zero());
+  radius_.resize(n);
+  mass_.resize(n);
+  inv_mass_.resize(n);
+  inv_inertia_.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    x_[i] = initial.position_m.col(k);
+    v_[i] = initial.velocity_m_s.col(k);
+    w_[i] = initial.angular_velocity_rad_s.col(k);
+    radius_[i] = initial.radius_m[k];
+    mass_[i] = initial.mass_kg[k];
+    inv_mass_[i] = 1.0 / mass_[i];
+    inv_inertia_[i] = 1.0 / initial.moment_of_inertia(k);
+  }
+  for (auto& walls : wall_history_) walls.assign(n, ContactHistory{});
+
+  host_ = host_model_.initial_state();
+  if (options_.hold_host) host_.v_m_s = 0.0;
+  ledger_.host_counts = !host_model_.has_infinite_mass();
+
+  refresh_neighbours();
+  compute_forces(0.0);
+  // Contacts present at the start (a settled bed) store elastic energy that belongs to
+  // E(0); nothing has been dissipated yet.
+  ledger_.dissipated_impact_J = ledger_.dissipated_friction_J = ledger_.dissipated_viscous_J = 0.0;
+  ledger_.excitation_work_J = 0.0;
+}
+
+void SoftEngine::advance_to(double t_s) {
+  while (t_s_ < t_s) {
+    const double remaining = t_s - t_s_;
+    // Take the remainder as the last step if a full step would overshoot (or leave a sliver).
+    const bool last = remaining <= dt_s_ * (1.0 + 1e-9);
+    step(last ? remaining : dt_s_);
+    if (last) t_s_ = t_s;
+  }
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    if (!x_[i].allFinite() || cavity_.clearance_m(x_[i], radius_[i], host_.z_m) < -radius_[i]) {
+      std::ostringstream msg;
+      msg << "particle " << i << " left the cavity at t = " << t_s_ << " s (position " << x_[i].transpose()
+          << " m); the time step " << dt_s_ << " s is too long for these contacts";
+      throw RuntimeFailure(msg.str());
+    }
+  }
+}
+
+void SoftEngine::step(double dt_s) {
+  kick(0.5 * dt_s);
+  drift(dt_s);
+  refresh_neighbours();
+  compute_forces(dt_s);
+  kick(0.5 * dt_s);
+  ++steps_;
+}
+
+void SoftEngine::kick(double dt_s) {
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    v_[i] += force_[i] * (inv_mass_[i] * dt_s);
+    w_[i] += torque_[i] * (inv_inertia_[i] * dt_s);
+  }
+  if (host_model_.has_infinite_mass()) {
+    host_.v_m_s = host_model_.prescribed_state(t_s_).v_m_s;
+  } else if (!options_.hold_host) {
+    host_.v_m_s += host_acceleration_m_s2() * dt_s;
+  }
+}
+
+void SoftEngine::drift(double dt_s) {
+  for (std::size_t i = 0; i < x_.size(); ++i) x_[i] += v_[i] * dt_s;
+  t_s_ += dt_s;
+  if (host_model_.has_infinite_mass()) {
+    // The walls move exactly as prescribed; their mean velocity over the step keeps the
+    // contacts' slip consistent with that motion.
+    const double z = host_model_.prescribed_state(t_s_).z_m;
+    host_.v_m_s = (z - host_.z_m) / dt_s;
+    host_.z_m = z;
+  } else if (!options_.hold_host) {
+    host_.z_m += host_.v_m_s * dt_s;
+  }
+}
+
+bool SoftEngine::moved_beyond_skin() const {
+  // Pair distances do not change when the whole bed rides with the host, so displacements
+  // count relative to the host's.
+  const Eigen::Vector3d host_shift(0.0, 0.0, host_.z_m - host_z_at_rebuild_);
+  const double limit_sq = 0.25 * neighbours_.skin_m() * neighbours_.skin_m();
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    if ((x_[i] - x_at_rebuild_[i] - host_shift).squaredNorm() > limit_sq) return true;
+  }
+  return false;
+}
+
+void SoftEngine::refresh_neighbours() {
+  if (!x_at_rebuild_.empty() && !moved_beyond_skin()) return;
+  neighbours_.rebuild(x_, radius_);
+  x_at_rebuild_ = x_;
+  host_z_at_rebuild_ = host_.z_m;
+}
+
+void SoftEngine::compute_forces(double dt_s) {
+  const Eigen::Vector3d& g = scenario_.gravity_m_s2;
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    force_[i] = mass_[i] * g;
+    torque_[i].setZero();
+  }
+  contact_elastic_J_ = 0.0;
+  contacts_ = 0;
+  add_particle_contacts(dt_s);
+  add_wall_contacts(dt_s);
+  add_host_forces(dt_s);
+}
+
+void SoftEngine::record_overlap(double overlap_m, double radius_m) {
+  ++contacts_;
+  const double ratio = overlap_m / radius_m;
+  if (ratio > max_overlap_ratio_) {
+    max_overlap_ratio_ = ratio;
+    max_overlap_time_s_ = t_s_;
+  }
+}
+
+void SoftEngine::add_particle_contacts(double dt_s) {
+  const SoftContactLaw& law = scenario_.soft_particle;
+  const int n = static_cast<int>(x_.size());
+  for (int i = 0; i < n; ++i) {
+    for (int k = neighbours_.first(i); k < neighbours_.first(i + 1); ++k) {
+      const int j = neighbours_.partner(k);
+      const Eigen::Vector3d d = x_[i] - x_[j];
+      const double reach = radius_[i] + radius_[j];
+      const double distance_sq = d.squaredNorm();
+      ContactHistory& history = neighbours_.history(k);
+      if (distance_sq >= reach * reach && !history.active()) continue;
+      const double distance = std::sqrt(distance_sq);
+      const ContactKinematics contact{d / distance, reach - distance, v_[i] - v_[j],
+                                      radius_[i] * w_[i] + radius_[j] * w_[j]};
+      const ContactForce c = evaluate_contact(law, contact, dt_s, history);
+      force_[i] += c.force_N;
+      force_[j] -= c.force_N;
+      const Eigen::Vector3d twist = contact.normal.cross(c.tangential_N);
+      torque_[i] -= radius_[i] * twist;
+      torque_[j] -= radius_[j] * twist;
+      ledger_.dissipated_impact_J += c.dissipated_normal_J;
+      ledger_.dissipated_friction_J += c.dissipated_tangential_J;
+      contact_elastic_J_ += c.elastic_J;
+      if (contact.overlap_m > 0.0) record_overlap(contact.overlap_m, std::min(radius_[i], radius_[j]));
+    }
+  }
+}
+
+void SoftEngine::add_wall_contacts(double dt_s) {
+  const SoftContactLaw& law = scenario_.soft_wall;
+  const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s);
+  const double wall_reach = cavity_.radius_m();
+  host_particle_force_N_ = 0.0;
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const double r = radius_[i];
+    const double rho_sq = x_[i].x() * x_[i].x() + x_[i].y() * x_[i].y();
+    const double side_limit = wall_reach - r;
+    const bool near[3] = {rho_sq > side_limit * side_limit, x_[i].z() - host_.z_m < r,
+                          host_.z_m + cavity_.height_m() - x_[i].z() < r};
+    for (int wall = side; wall <= top; ++wall) {
+      ContactHistory& history = wall_history_[wall][i];
+      if (!near[wall] && !history.active()) continue;
+      const WallGap gap = cavity_.gap(static_cast<Wall>(wall), x_[i], r, host_.z_m);
+      const ContactForce c =
+          evaluate_contact(law, {gap.normal, -gap.gap_m, v_[i] - wall_velocity, r * w_[i]}, dt_s, history);
+      force_[i] += c.force_N;
+      torque_[i] -= r * gap.normal.cross(c.tangential_N);
+      host_particle_force_N_ -= c.force_N.z();
+      ledger_.dissipated_impact_J += c.dissipated_normal_J;
+      ledger_.dissipated_friction_J += c.dissipated_tangential_J;
+      contact_elastic_J_ += c.elastic_J;
+      if (gap.gap_m < 0.0) record_overlap(-gap.gap_m, r);
+    }
+  }
+}
+
+void SoftEngine::add_host_forces(double dt_s) {
+  // Books the host's energy over the step as the trapezoid of the forces the integrator
+  // applies (see contact_law.hpp); the state of the previous step is remembered here.
+  const double y = host_model_.base_position_m(t_s_);
+  const HostForces now{host_.z_m - y, host_.v_m_s - host_model_.base_velocity_m_s(t_s_),
+                       host_model_.applied_force_N(t_s_), host_particle_force_N_, host_.z_m, y};
+  host_other_force_N_ = host_model_.force_N(t_s_, host_);
+  if (dt_s > 0.0) {
+    const HostForces& before = previous_host_forces_;
+    const double dz = now.z_m - before.z_m, dy = now.base_m - before.base_m;
+    if (host_model_.has_infinite_mass()) {
+      // The walls' prescribed motion does work on the particles: the reaction of the
+      // particles' force on the host, −F_particles, times the walls' displacement.
+      ledger_.excitation_work_J -= 0.5 * (before.particles_N + now.particles_N) * dz;
+    } else if (!options_.hold_host) {
+      const double k = host_model_.stiffness_N_m(), c = host_model_.damping_N_s_m();
+      ledger_.dissipated_viscous_J += 0.5 * c * (before.stretch_rate_m_s + now.stretch_rate_m_s) * (dz - dy);
+      ledger_.excitation_work_J += 0.5 * (before.applied_N + now.applied_N) * dz -
+                                   0.5 * (k * (before.stretch_m + now.stretch_m) +
+                                          c * (before.stretch_rate_m_s + now.stretch_rate_m_s)) * dy;
+    }
+  }
+  previous_host_forces_ = now;
+}
+
+double SoftEngine::host_acceleration_m_s2() const {
+  return (host_other_force_N_ + host_particle_force_N_) / host_model_.mass_kg();
+}
+
+double SoftEngine::particle_kinetic_J() const {
+  double kinetic = 0.0;
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    kinetic += 0.5 * mass_[i] * v_[i].squaredNorm() + 0.5 * w_[i].squaredNorm() / inv_inertia_[i];
+  }
+  return kinetic;
+}
+
+Observation SoftEngine::observe() const {
+  Observation o;
+  o.t_s = t_s_;
+  o.host = host_;
+  o.energy = ledger_;
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    o.energy.particle_translational_J += 0.5 * mass_[i] * v_[i].squaredNorm();
+    o.energy.particle_rotational_J += 0.5 * w_[i].squaredNorm() / inv_inertia_[i];
+    o.energy.gravitational_potential_J -= mass_[i] * scenario_.gravity_m_s2.dot(x_[i]);
+  }
+  o.energy.host_kinetic_J = 0.5 * host_model_.mass_kg() * host_.v_m_s * host_.v_m_s;
+  o.energy.spring_potential_J = host_model_.spring_energy_J(t_s_, host_.z_m);
+  o.energy.contact_elastic_J = contact_elastic_J_;
+  o.counters.steps = steps_;
+  o.counters.contacts = contacts_;
+  return o;
+}
+
+State SoftEngine::state() const {
+  State s{observe(), Particles(static_cast<Eigen::Index>(x_.size()))};
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    s.particles.position_m.col(k) = x_[i];
+    s.particles.velocity_m_s.col(k) = v_[i];
+    s.particles.angular_velocity_rad_s.col(k) = w_[i];
+    s.particles.radius_m[k] = radius_[i];
+    s.particles.mass_kg[k] = mass_[i];
+  }
+  return s;
+}
+
+EngineStatistics SoftEngine::statistics() const {
+  return {{"steps", steps_},
+          {"neighbour_rebuilds", neighbours_.rebuilds()},
+          {"neighbour_pairs", neighbours_.size()},
+          {"max_overlap_ppm_of_radius", std::llround(max_overlap_ratio_ * 1e6)}};
+}
+
+std::vector<std::string> SoftEngine::warnings() const {
+  constexpr double overlap_warning_ratio = 0.02;
+  if (max_overlap_ratio_ <= overlap_warning_ratio) return {};
+  std::ostringstream msg;
+  msg.precision(3);
+  msg << "contacts overlapped up to " << 100.0 * max_overlap_ratio_ << " % of a sphere radius (t = "
+      << max_overlap_time_s_ << " s): the contact law is soft for these impacts, so results depend on k_n there";
+  return {msg.str()};
+}
+
+}  // namespace pdamp::soft

@@ -9,8 +9,8 @@
 #include <sstream>
 
 #include "pdamp/errors.hpp"
-#include "pdamp/model/placement.hpp"
 #include "pdamp/sim/engine_factory.hpp"
+#include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/store/run_store.hpp"
 
@@ -61,7 +61,7 @@ void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
       << "\n  dissipated viscous      " << format_optional(s->dissipated_viscous_J) << " J"
       << "\n  samples, cycles         " << s->n_samples << ", " << s->n_cycles << "\n";
   for (const auto& [name, value] : store.statistics(run_id)) {
-    out << "  " << std::left << std::setw(24) << name << std::right << value << "\n";
+    out << "  " << std::left << std::setw(28) << name << std::right << value << "\n";
   }
   if (s->n_cycles == 0) return;
   sqlite::Statement cycles(store.database(),
@@ -77,6 +77,24 @@ void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
   }
 }
 
+InitialBed prepare_bed(const Scenario& scenario, RunStore& store, bool show_progress) {
+  std::function<void(double, double)> progress;
+  if (show_progress) {
+    progress = [](double t, double kinetic) {
+      std::fprintf(stderr, "\r  settling the bed: t = %.3f s, kinetic energy %.3g J   ", t, kinetic);
+      std::fflush(stderr);
+    };
+  }
+  InitialBed bed = prepare_initial_bed(scenario, store, &stop_requested, progress);
+  if (show_progress && !bed.reused && scenario.particles.count > 0) std::fputs("\n", stderr);
+  if (bed.state_id) {
+    std::cerr << "pdamp: " << (bed.reused ? "starting from stored" : "settled and stored") << " bed "
+              << *bed.state_id << " (" << scenario.particles.count << " spheres at rest after " << bed.settle_time_s
+              << " s of settling)\n";
+  }
+  return bed;
+}
+
 }  // namespace
 
 int run_command(const ScenarioRequest& request, const std::string& model_name, const std::filesystem::path& db,
@@ -84,16 +102,16 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
   // Everything that can be wrong with the input is found before the store is touched.
   const Model model = parse_model(model_name);
   const Scenario scenario = load_scenario(request.file, request.overrides);
-  const Particles initial = place_particles(scenario.particles, scenario.cavity, scenario.host.z0_m);
-  auto engine = make_engine(model, scenario, initial);
+  check_model_can_run(model, scenario);
 
   RunStore store(db);
-  const std::int64_t run_id = store.begin_run({std::string(to_string(model)), scenario.name, scenario.canonical_text,
-                                               scenario.particles.seed, scenario.particles.count,
-                                               scenario.run.duration_s,
-                                               engine->time_step_s() > 0 ? std::optional(engine->time_step_s())
-                                                                         : std::nullopt});
   install_stop_handlers();
+  const InitialBed bed = prepare_bed(scenario, store, show_progress);
+  auto engine = make_engine(model, scenario, bed.particles);
+  const std::int64_t run_id = store.begin_run(
+      {std::string(to_string(model)), scenario.name, scenario.canonical_text, scenario.particles.seed,
+       scenario.particles.count, scenario.run.duration_s,
+       engine->time_step_s() > 0 ? std::optional(engine->time_step_s()) : std::nullopt, bed.state_id});
   RunControl control;
   control.stop = &stop_requested;
   if (show_progress) {
@@ -109,18 +127,24 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
     outcome = run_simulation(*engine, scenario, writer, control);
   }
   if (show_progress) std::fputs("\n", stderr);
+  for (const auto& warning : engine->warnings()) {
+    std::cerr << "pdamp: warning: run " << run_id << ": " << warning << "\n";
+    outcome.message += (outcome.message.empty() ? "warning: " : "; warning: ") + warning;
+  }
   store.save_statistics(run_id, engine->statistics());
   store.finish_run(run_id, {outcome.status, outcome.message, outcome.sim_time_s, outcome.wall_time_s,
                             outcome.initial_energy_J, outcome.max_energy_balance_rel_err});
   print_summary(store, run_id, std::cout);
   switch (outcome.status) {
     case RunStatus::completed: return 0;
-    case RunStatus::interrupted: return 128 + stop_signal.load();
+    case RunStatus::interrupted: return 128 + stop_signal_received();
     default: break;
   }
   std::cerr << "pdamp: run " << run_id << " failed: " << outcome.message << "\n";
   return 1;
 }
+
+int stop_signal_received() { return stop_signal.load(); }
 
 int list_runs_command(const std::filesystem::path& db) {
   require_existing(db);

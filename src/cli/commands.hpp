@@ -18,5 +18,7 @@ int run_command(const ScenarioRequest& request, const std::string& model, const 
 int list_runs_command(const std::filesystem::path& db);
 int show_run_command(const std::string& run_id, const std::filesystem::path& db);
 int check_command(const ScenarioRequest& request);
+/// The signal that asked a run to stop (0 if none).
+int stop_signal_received();
 
 }  // namespace pdamp

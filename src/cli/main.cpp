@@ -150,6 +150,9 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::cerr << "pdamp: " << e.what() << "\n";
     return 2;
+  } catch (const Interrupted& e) {
+    std::cerr << "pdamp: " << e.what() << "\n";
+    return 128 + stop_signal_received();
   } catch (const std::exception& e) {
     std::cerr << "pdamp: error: " << e.what() << "\n";
     return 1;

@@ -31,6 +31,8 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
   v_.resize(n);
   w_.resize(n);
   force_.assign(n, Eigen::Vector3d::Zero());
+  v_predicted_.assign(n, Eigen::Vector3d::Zero());
+  w_predicted_.assign(n, Eigen::Vector3d::Zero());
   torque_.assign(n, Eigen::Vector3d::Zero());
   radius_.resize(n);
   mass_.resize(n);
@@ -47,9 +49,12 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
     inv_inertia_[i] = 1.0 / initial.moment_of_inertia(k);
   }
   for (auto& walls : wall_history_) walls.assign(n, ContactHistory{});
+  v_predicted_ = v_;
+  w_predicted_ = w_;
 
   host_ = host_model_.initial_state();
   if (options_.hold_host) host_.v_m_s = 0.0;
+  host_v_predicted_m_s_ = host_.v_m_s;
   ledger_.host_counts = !host_model_.has_infinite_mass();
 
   refresh_neighbours();
@@ -100,16 +105,22 @@ void SoftEngine::kick(double dt_s) {
 }
 
 void SoftEngine::drift(double dt_s) {
-  for (std::size_t i = 0; i < x_.size(); ++i) x_[i] += v_[i] * dt_s;
+  for (std::size_t i = 0; i < x_.size(); ++i) {
+    x_[i] += v_[i] * dt_s;
+    v_predicted_[i] = v_[i] + force_[i] * (0.5 * inv_mass_[i] * dt_s);
+    w_predicted_[i] = w_[i] + torque_[i] * (0.5 * inv_inertia_[i] * dt_s);
+  }
   t_s_ += dt_s;
   if (host_model_.has_infinite_mass()) {
     // The walls move exactly as prescribed; their mean velocity over the step keeps the
     // contacts' slip consistent with that motion.
-    const double z = host_model_.prescribed_state(t_s_).z_m;
-    host_.v_m_s = (z - host_.z_m) / dt_s;
-    host_.z_m = z;
+    const HostState prescribed = host_model_.prescribed_state(t_s_);
+    host_.v_m_s = (prescribed.z_m - host_.z_m) / dt_s;
+    host_.z_m = prescribed.z_m;
+    host_v_predicted_m_s_ = prescribed.v_m_s;
   } else if (!options_.hold_host) {
     host_.z_m += host_.v_m_s * dt_s;
+    host_v_predicted_m_s_ = host_.v_m_s + 0.5 * host_acceleration_m_s2() * dt_s;
   }
 }
 
@@ -133,15 +144,16 @@ void SoftEngine::refresh_neighbours() {
 
 void SoftEngine::compute_forces(double dt_s) {
   const Eigen::Vector3d& g = scenario_.gravity_m_s2;
+  const double drag = options_.settling_drag_1_s;
   for (std::size_t i = 0; i < x_.size(); ++i) {
-    force_[i] = mass_[i] * g;
-    torque_[i].setZero();
+    force_[i] = mass_[i] * (g - drag * v_[i]);
+    torque_[i] = -drag / inv_inertia_[i] * w_[i];
   }
   contact_elastic_J_ = 0.0;
   contacts_ = 0;
   add_particle_contacts(dt_s);
   add_wall_contacts(dt_s);
-  add_host_forces(dt_s);
+  add_host_forces();
 }
 
 void SoftEngine::record_overlap(double overlap_m, double radius_m) {
@@ -165,14 +177,19 @@ void SoftEngine::add_particle_contacts(double dt_s) {
       ContactHistory& history = neighbours_.history(k);
       if (distance_sq >= reach * reach && !history.active()) continue;
       const double distance = std::sqrt(distance_sq);
-      const ContactKinematics contact{d / distance, reach - distance, v_[i] - v_[j],
-                                      radius_[i] * w_[i] + radius_[j] * w_[j]};
+      // The contact point splits the centre distance in the ratio of the radii, so the
+      // lever arms add up to the distance and angular momentum is conserved exactly.
+      const double lever_i = radius_[i] * distance / reach, lever_j = radius_[j] * distance / reach;
+      const Eigen::Vector3d normal = d / distance;
+      const ContactKinematics contact{
+          normal, reach - distance, v_[i] - v_[j] - (lever_i * w_[i] + lever_j * w_[j]).cross(normal),
+          v_predicted_[i] - v_predicted_[j] - (lever_i * w_predicted_[i] + lever_j * w_predicted_[j]).cross(normal)};
       const ContactForce c = evaluate_contact(law, contact, dt_s, history);
       force_[i] += c.force_N;
       force_[j] -= c.force_N;
       const Eigen::Vector3d twist = contact.normal.cross(c.tangential_N);
-      torque_[i] -= radius_[i] * twist;
-      torque_[j] -= radius_[j] * twist;
+      torque_[i] -= lever_i * twist;
+      torque_[j] -= lever_j * twist;
       ledger_.dissipated_impact_J += c.dissipated_normal_J;
       ledger_.dissipated_friction_J += c.dissipated_tangential_J;
       contact_elastic_J_ += c.elastic_J;
@@ -183,7 +200,7 @@ void SoftEngine::add_particle_contacts(double dt_s) {
 
 void SoftEngine::add_wall_contacts(double dt_s) {
   const SoftContactLaw& law = scenario_.soft_wall;
-  const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s);
+  const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s), wall_velocity_predicted(0.0, 0.0, host_v_predicted_m_s_);
   const double wall_reach = cavity_.radius_m();
   host_particle_force_N_ = 0.0;
   for (std::size_t i = 0; i < x_.size(); ++i) {
@@ -196,10 +213,12 @@ void SoftEngine::add_wall_contacts(double dt_s) {
       ContactHistory& history = wall_history_[wall][i];
       if (!near[wall] && !history.active()) continue;
       const WallGap gap = cavity_.gap(static_cast<Wall>(wall), x_[i], r, host_.z_m);
-      const ContactForce c =
-          evaluate_contact(law, {gap.normal, -gap.gap_m, v_[i] - wall_velocity, r * w_[i]}, dt_s, history);
+      const double lever = r + std::min(gap.gap_m, 0.0);  // the contact point is on the wall
+      const ContactKinematics contact{gap.normal, -gap.gap_m, v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity,
+                                      v_predicted_[i] - lever * w_predicted_[i].cross(gap.normal) - wall_velocity_predicted};
+      const ContactForce c = evaluate_contact(law, contact, dt_s, history);
       force_[i] += c.force_N;
-      torque_[i] -= r * gap.normal.cross(c.tangential_N);
+      torque_[i] -= lever * gap.normal.cross(c.tangential_N);
       host_particle_force_N_ -= c.force_N.z();
       ledger_.dissipated_impact_J += c.dissipated_normal_J;
       ledger_.dissipated_friction_J += c.dissipated_tangential_J;
@@ -209,27 +228,26 @@ void SoftEngine::add_wall_contacts(double dt_s) {
   }
 }
 
-void SoftEngine::add_host_forces(double dt_s) {
-  // Books the host's energy over the step as the trapezoid of the forces the integrator
-  // applies (see contact_law.hpp); the state of the previous step is remembered here.
+void SoftEngine::add_host_forces() {
+  if (options_.hold_host) return;
+  // The forces act at the end of the step, the damper on the predicted velocity; the
+  // books take the trapezoid of each force over the step's displacements.
   const double y = host_model_.base_position_m(t_s_);
-  const HostForces now{host_.z_m - y, host_.v_m_s - host_model_.base_velocity_m_s(t_s_),
+  const HostForces now{host_.z_m - y, host_v_predicted_m_s_ - host_model_.base_velocity_m_s(t_s_),
                        host_model_.applied_force_N(t_s_), host_particle_force_N_, host_.z_m, y};
-  host_other_force_N_ = host_model_.force_N(t_s_, host_);
-  if (dt_s > 0.0) {
-    const HostForces& before = previous_host_forces_;
-    const double dz = now.z_m - before.z_m, dy = now.base_m - before.base_m;
-    if (host_model_.has_infinite_mass()) {
-      // The walls' prescribed motion does work on the particles: the reaction of the
-      // particles' force on the host, −F_particles, times the walls' displacement.
-      ledger_.excitation_work_J -= 0.5 * (before.particles_N + now.particles_N) * dz;
-    } else if (!options_.hold_host) {
-      const double k = host_model_.stiffness_N_m(), c = host_model_.damping_N_s_m();
-      ledger_.dissipated_viscous_J += 0.5 * c * (before.stretch_rate_m_s + now.stretch_rate_m_s) * (dz - dy);
-      ledger_.excitation_work_J += 0.5 * (before.applied_N + now.applied_N) * dz -
-                                   0.5 * (k * (before.stretch_m + now.stretch_m) +
-                                          c * (before.stretch_rate_m_s + now.stretch_rate_m_s)) * dy;
-    }
+  host_other_force_N_ = host_model_.force_N(t_s_, {host_.z_m, host_v_predicted_m_s_});
+  const HostForces& before = previous_host_forces_;
+  const double dz = now.z_m - before.z_m, dy = now.base_m - before.base_m;
+  if (host_model_.has_infinite_mass()) {
+    // The walls' prescribed motion does work on the particles: the reaction of the
+    // particles' force on the host, −F_particles, times the walls' displacement.
+    ledger_.excitation_work_J -= 0.5 * (before.particles_N + now.particles_N) * dz;
+  } else {
+    const double k = host_model_.stiffness_N_m(), c = host_model_.damping_N_s_m();
+    const double mean_damper_N = 0.5 * c * (before.stretch_rate_m_s + now.stretch_rate_m_s);
+    ledger_.dissipated_viscous_J += mean_damper_N * (dz - dy);
+    ledger_.excitation_work_J += 0.5 * (before.applied_N + now.applied_N) * dz -
+                                 (0.5 * k * (before.stretch_m + now.stretch_m) + mean_damper_N) * dy;
   }
   previous_host_forces_ = now;
 }

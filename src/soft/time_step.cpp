@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <sstream>
 
@@ -21,9 +22,28 @@ double max_impact_speed_m_s(const Scenario& scenario) {
   return 2.0 * host_speed + std::sqrt(2.0 * scenario.gravity_m_s2.norm() * scenario.cavity.height_m);
 }
 
-double shortest_contact_time_s(const Scenario& scenario) {
+namespace {
+
+double lightest_sphere_kg(const Scenario& scenario) {
   const auto& p = scenario.particles;
-  const double lightest_kg = p.density_kg_m3 * std::numbers::pi / 6.0 * std::pow(p.diameter_min_m, 3);
+  return p.density_kg_m3 * std::numbers::pi / 6.0 * std::pow(p.diameter_min_m, 3);
+}
+
+double tangential_period_s(double effective_mass_kg, double ks_N_m) {
+  return ks_N_m > 0.0 ? 2.0 * std::numbers::pi * std::sqrt(effective_mass_kg / ks_N_m)
+                      : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+double shortest_tangential_period_s(const Scenario& scenario) {
+  const double m = lightest_sphere_kg(scenario);
+  return std::min(tangential_period_s(m / 7.0, scenario.soft_particle.ks_N_m),
+                  tangential_period_s(2.0 * m / 7.0, scenario.soft_wall.ks_N_m));
+}
+
+double shortest_contact_time_s(const Scenario& scenario) {
+  const double lightest_kg = lightest_sphere_kg(scenario);
   // A resting bed has no impacts; still, a contact must be resolved at some speed.
   const double speed = std::max(max_impact_speed_m_s(scenario), 1e-3);
   return std::min(hertz_contact_time_s(0.5 * lightest_kg, scenario.soft_particle.kn_N_m1_5, speed),
@@ -32,14 +52,17 @@ double shortest_contact_time_s(const Scenario& scenario) {
 
 double choose_time_step_s(const Scenario& scenario) {
   const double contact = shortest_contact_time_s(scenario);
-  if (!scenario.run.dt_s) return contact / steps_per_contact_auto;
+  const double tangential = shortest_tangential_period_s(scenario);
+  const double automatic = std::min(contact / steps_per_contact_auto, tangential / steps_per_tangential_period_auto);
+  if (!scenario.run.dt_s) return automatic;
   const double dt = *scenario.run.dt_s;
-  if (dt > contact / steps_per_contact_minimum) {
+  const double limit = std::min(contact / steps_per_contact_minimum, tangential / steps_per_tangential_period_minimum);
+  if (dt > limit) {
     std::ostringstream msg;
-    msg << "run.dt_s = " << dt << " s cannot resolve the shortest Hertz contact of this scenario (t_c = " << contact
-        << " s at an impact speed of " << max_impact_speed_m_s(scenario) << " m/s); use run.dt_s <= "
-        << contact / steps_per_contact_minimum << " s (t_c/10), or 'auto' (t_c/50 = " << contact / steps_per_contact_auto
-        << " s)";
+    msg << "run.dt_s = " << dt << " s is too long: the shortest Hertz contact of this scenario lasts t_c = " << contact
+        << " s (impact speed " << max_impact_speed_m_s(scenario) << " m/s) and a sticking contact's tangential "
+        << "spring oscillates with period T_s = " << tangential << " s; use run.dt_s <= " << limit
+        << " s (min(t_c/10, T_s/4)), or 'auto' (" << automatic << " s)";
     throw InputError(msg.str());
   }
   return dt;

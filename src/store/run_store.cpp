@@ -101,7 +101,8 @@ void RunStore::migrate() {
 std::int64_t RunStore::begin_run(const NewRun& run) {
   sqlite::Statement insert(db_,
                            "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, "
-                           "dt_s, pdamp_version, status, started_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'running', ?)");
+                           "dt_s, pdamp_version, status, started_at, initial_state_id) "
+                           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'running', ?, ?)");
   insert.bind(1, run.model)
       .bind(2, run.scenario_name)
       .bind(3, run.scenario_text)
@@ -111,8 +112,70 @@ std::int64_t RunStore::begin_run(const NewRun& run) {
       .bind(7, run.dt_s)
       .bind(8, std::string_view(version_string))
       .bind(9, utc_now_iso8601());
+  if (run.initial_state_id) insert.bind(10, *run.initial_state_id);
   insert.run();
   return db_.last_insert_rowid();
+}
+
+std::optional<StoredInitialState> RunStore::find_initial_state(const std::string& settle_key) {
+  sqlite::Statement query(db_, "SELECT state_id, settle_time_s FROM initial_states WHERE settle_key = ?");
+  query.bind(1, settle_key);
+  if (!query.step()) return std::nullopt;
+  const std::int64_t id = query.column_int(0);
+  return StoredInitialState{id, load_initial_particles(id), query.column_double(1)};
+}
+
+std::int64_t RunStore::save_initial_state(const std::string& settle_key, const Particles& p, double settle_time_s,
+                                          double kinetic_J, double wall_time_s) {
+  sqlite::Transaction transaction(db_);
+  // Another process may have settled the same bed meanwhile: the first one stays.
+  sqlite::Statement existing(db_, "SELECT state_id FROM initial_states WHERE settle_key = ?");
+  existing.bind(1, settle_key);
+  if (existing.step()) return existing.column_int(0);
+  sqlite::Statement state(db_,
+                          "INSERT INTO initial_states (settle_key, n_particles, settle_time_s, kinetic_J, wall_time_s, "
+                          "created_at) VALUES (?, ?, ?, ?, ?, ?)");
+  state.bind(1, settle_key)
+      .bind(2, static_cast<std::int64_t>(p.size()))
+      .bind(3, settle_time_s)
+      .bind(4, kinetic_J)
+      .bind(5, wall_time_s)
+      .bind(6, utc_now_iso8601());
+  state.run();
+  const std::int64_t id = db_.last_insert_rowid();
+  sqlite::Statement particle(db_,
+                             "INSERT INTO initial_particles VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    particle.bind(1, id).bind(2, static_cast<std::int64_t>(i));
+    for (int c = 0; c < 3; ++c) {
+      particle.bind(3 + c, p.position_m(c, i)).bind(6 + c, p.velocity_m_s(c, i)).bind(9 + c, p.angular_velocity_rad_s(c, i));
+    }
+    particle.bind(12, p.radius_m[i]).bind(13, p.mass_kg[i]);
+    particle.run();
+  }
+  transaction.commit();
+  return id;
+}
+
+Particles RunStore::load_initial_particles(std::int64_t state_id) {
+  sqlite::Statement count(db_, "SELECT n_particles FROM initial_states WHERE state_id = ?");
+  count.bind(1, state_id);
+  if (!count.step()) throw InputError("initial state " + std::to_string(state_id) + " is not in the store");
+  Particles p(count.column_int(0));
+  sqlite::Statement rows(db_, "SELECT * FROM initial_particles WHERE state_id = ? ORDER BY particle");
+  rows.bind(1, state_id);
+  Eigen::Index i = 0;
+  for (; rows.step() && i < p.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      p.position_m(c, i) = rows.column_double(2 + c);
+      p.velocity_m_s(c, i) = rows.column_double(5 + c);
+      p.angular_velocity_rad_s(c, i) = rows.column_double(8 + c);
+    }
+    p.radius_m[i] = rows.column_double(11);
+    p.mass_kg[i] = rows.column_double(12);
+  }
+  if (i != p.size()) throw RuntimeFailure("initial state " + std::to_string(state_id) + " is incomplete in the store");
+  return p;
 }
 
 void RunStore::finish_run(std::int64_t run_id, const RunEnd& end) {

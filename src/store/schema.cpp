@@ -87,7 +87,38 @@ CREATE TABLE run_statistics (
 ) STRICT, WITHOUT ROWID;
 )sql";
 
-constexpr std::array<std::string_view, 2> all{v1_runs_samples_cycles, v2_run_statistics};
+constexpr std::string_view v3_initial_states = R"sql(
+CREATE TABLE initial_states (
+  state_id       INTEGER PRIMARY KEY,
+  settle_key     TEXT NOT NULL UNIQUE,  -- every setting that determines the bed
+  n_particles    INTEGER NOT NULL,
+  settle_time_s  REAL NOT NULL,         -- simulated settling time
+  kinetic_J      REAL NOT NULL,         -- particle kinetic energy when declared at rest
+  wall_time_s    REAL NOT NULL,
+  created_at     TEXT NOT NULL
+) STRICT;
+
+CREATE TABLE initial_particles (
+  state_id   INTEGER NOT NULL REFERENCES initial_states (state_id) ON DELETE CASCADE,
+  particle   INTEGER NOT NULL,
+  x_m        REAL NOT NULL,
+  y_m        REAL NOT NULL,
+  z_m        REAL NOT NULL,
+  vx_m_s     REAL NOT NULL,
+  vy_m_s     REAL NOT NULL,
+  vz_m_s     REAL NOT NULL,
+  wx_rad_s   REAL NOT NULL,
+  wy_rad_s   REAL NOT NULL,
+  wz_rad_s   REAL NOT NULL,
+  radius_m   REAL NOT NULL,
+  mass_kg    REAL NOT NULL,
+  PRIMARY KEY (state_id, particle)
+) STRICT, WITHOUT ROWID;
+
+ALTER TABLE runs ADD COLUMN initial_state_id INTEGER REFERENCES initial_states (state_id);
+)sql";
+
+constexpr std::array<std::string_view, 3> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states};
 
 }  // namespace
 

@@ -6,13 +6,17 @@
 /// ξ is the contact's accumulated tangential displacement, rotated onto the current
 /// tangent plane (magnitude kept) as the contact turns.
 ///
-/// Energy bookkeeping per step: the work the contact does on the pair is the trapezoid of
-/// the forces and torques the integrator applied over the displacements and rotations it
-/// made; what that work did not put into the contact's elastic energy was dissipated —
-/// the normal force's share to impact, the tangential force's to friction. With velocity
-/// Verlet the kinetic energy then differs from the books only by a term that telescopes,
-/// Σ (|F_{n+1}|² − |F_n|²) Δt²/8m: the balance error is O(Δt²) and does not accumulate,
-/// whatever the clamp or the sliding resets do.
+/// Energy: each step books what the mechanisms dissipate, as the trapezoid of the forces
+/// the integrator applies over the displacements it makes (the same rule by which
+/// velocity Verlet changes the kinetic energy, up to a term that does not accumulate):
+///   impact   — the normal force beyond the elastic k_n δ^{3/2} (the dashpot, or where the
+///              clamp acts, the elastic force it removes) times the change of overlap;
+///   friction — the tangential force's work on the slip, less what the spring stores; for
+///              a sticking contact this is exactly the tangential dashpot's work (the
+///              trapezoid rule is exact for a linear spring), for a sliding one the
+///              Coulomb slider's.
+/// The Hertz spring is conservative and booked as stored energy, so what remains in the
+/// energy balance is the integration error itself, O(Δt²).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -25,92 +29,83 @@ namespace pdamp::soft {
 /// What a contact remembers from one step to the next.
 struct ContactHistory {
   Eigen::Vector3d tangential_displacement_m = Eigen::Vector3d::Zero();  ///< ξ
-  Eigen::Vector3d force_N = Eigen::Vector3d::Zero();                    ///< force on body i applied last step
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();                     ///< contact normal last step
-  double overlap_m = 0.0;  ///< δ last step; > 0 while in contact
+  Eigen::Vector3d tangential_force_N = Eigen::Vector3d::Zero();         ///< f_s applied last step
+  double normal_damping_force_N = 0.0;  ///< f_n − k_n δ^{3/2} applied last step (dashpot and clamp)
+  double overlap_m = 0.0;               ///< δ last step; > 0 while in contact
 
   bool active() const { return overlap_m > 0.0; }
 };
 
-/// How the two bodies meet this step, with the velocities the integrator moved them by.
+/// How the two bodies meet this step.
 struct ContactKinematics {
-  Eigen::Vector3d normal;           ///< unit vector from body j to body i
-  double overlap_m;                 ///< r_i + r_j − distance; ≤ 0 means apart
-  Eigen::Vector3d centre_velocity;  ///< v_i − v_j (a wall's velocity for a wall contact)
-  Eigen::Vector3d lever_spin;       ///< r_i ω_i + r_j ω_j (a wall does not spin)
+  Eigen::Vector3d normal;  ///< unit vector from body j to body i
+  double overlap_m;        ///< r_i + r_j − distance; ≤ 0 means apart
+  /// Velocity of i's contact point relative to j's over the step (what the integrator
+  /// moved them by): its tangential part is the slip that loads the tangential spring.
+  Eigen::Vector3d slip_velocity;
+  /// The same at the end of the step, predicted to second order (v + a Δt/2 from the
+  /// half-step velocity): the dashpots act on it, so damping is not half a step late.
+  Eigen::Vector3d damper_velocity;
 };
 
 /// The force on body i at one contact, and the energy it moved this step.
 struct ContactForce {
   Eigen::Vector3d force_N;       ///< on body i (body j gets the opposite)
-  Eigen::Vector3d tangential_N;  ///< tangential part of force_N, for the torques −r n × f_s
+  Eigen::Vector3d tangential_N;  ///< tangential part of force_N, for the torques −l n × f_s
   double elastic_J = 0.0;               ///< energy stored in the contact after the step
   double dissipated_normal_J = 0.0;     ///< this step's impact loss
   double dissipated_tangential_J = 0.0; ///< this step's friction loss
 };
 
-/// Evaluates one contact for a step of length dt and updates its history. A contact
-/// that has come apart (overlap ≤ 0) is closed: its books are balanced and its history
-/// cleared.
+/// Evaluates one contact for a step of length dt and updates its history; a contact that
+/// has come apart (overlap ≤ 0) is forgotten, its spring's leftover energy booked as friction.
 inline ContactForce evaluate_contact(const SoftContactLaw& law, const ContactKinematics& k, double dt_s,
                                      ContactHistory& h) {
+  ContactForce out;
   const Eigen::Vector3d& n = k.normal;
-  const Eigen::Vector3d contact_velocity = k.centre_velocity - k.lever_spin.cross(n);
-  const double normal_speed = contact_velocity.dot(n);  // = −δ'
-  const Eigen::Vector3d tangential_velocity = contact_velocity - normal_speed * n;
+  const double slip_normal = k.slip_velocity.dot(n);
+  const Eigen::Vector3d slip_m = (k.slip_velocity - slip_normal * n) * dt_s;
+  const double overlap_change_m = -slip_normal * dt_s;
+  const double spring_energy_before = 0.5 * law.ks_N_m * h.tangential_displacement_m.squaredNorm();
 
-  const double old_fn = h.force_N.dot(h.normal);
-  const Eigen::Vector3d old_fs = h.force_N - old_fn * h.normal;
-  const double old_elastic =
-      (h.active() ? 0.4 * law.kn_N_m1_5 * h.overlap_m * h.overlap_m * std::sqrt(h.overlap_m) : 0.0) +
-      0.5 * law.ks_N_m * h.tangential_displacement_m.squaredNorm();
-
-  double fn = 0.0;
+  double damping_force = 0.0;
   Eigen::Vector3d fs = Eigen::Vector3d::Zero();
-  double elastic = 0.0;
   if (k.overlap_m > 0.0) {
+    const double closing_speed = -k.damper_velocity.dot(n);  // δ'
+    const Eigen::Vector3d tangential_velocity = k.damper_velocity + closing_speed * n;
     const double elastic_force = law.kn_N_m1_5 * k.overlap_m * std::sqrt(k.overlap_m);
-    fn = std::max(0.0, elastic_force - law.cn_N_s_m * normal_speed);
+    const double fn = std::max(0.0, elastic_force + law.cn_N_s_m * closing_speed);
+    damping_force = fn - elastic_force;
 
     Eigen::Vector3d& xi = h.tangential_displacement_m;
     const double xi_norm = xi.norm();
     xi -= xi.dot(n) * n;  // onto the current tangent plane ...
     const double projected = xi.norm();
     if (projected > 0.0) xi *= xi_norm / projected;  // ... keeping the stored spring energy
-    xi += tangential_velocity * dt_s;
+    xi += slip_m;
     fs = -law.ks_N_m * xi - law.cs_N_s_m * tangential_velocity;
     const double cap = law.mu * fn;
     const double fs_norm = fs.norm();
     if (fs_norm > cap) {
+      // Sliding: the force is capped and the spring keeps only what the capped force allows.
       fs *= cap / fs_norm;
       if (law.ks_N_m > 0.0) xi = -(fs + law.cs_N_s_m * tangential_velocity) / law.ks_N_m;
     }
-    elastic = 0.4 * elastic_force * k.overlap_m + 0.5 * law.ks_N_m * xi.squaredNorm();
-  }
-
-  // Work done on the pair this step: the trapezoid of the forces and torques the
-  // integrator applies, over the displacements and rotations it makes.
-  const Eigen::Vector3d centre_shift = k.centre_velocity * dt_s, spin_turn = k.lever_spin * dt_s;
-  const double normal_work = 0.5 * (old_fn * h.normal + fn * n).dot(centre_shift);
-  const double tangential_work =
-      0.5 * (old_fs + fs).dot(centre_shift) - 0.5 * (h.normal.cross(old_fs) + n.cross(fs)).dot(spin_turn);
-  const double elastic_normal_change =
-      (k.overlap_m > 0.0 ? 0.4 * law.kn_N_m1_5 * k.overlap_m * k.overlap_m * std::sqrt(k.overlap_m) : 0.0) -
-      (h.active() ? 0.4 * law.kn_N_m1_5 * h.overlap_m * h.overlap_m * std::sqrt(h.overlap_m) : 0.0);
-
-  ContactForce out;
-  out.force_N = fn * n + fs;
-  out.tangential_N = fs;
-  out.elastic_J = elastic;
-  out.dissipated_normal_J = -normal_work - elastic_normal_change;
-  out.dissipated_tangential_J = -tangential_work - (elastic - old_elastic - elastic_normal_change);
-  if (k.overlap_m > 0.0) {
-    h.force_N = out.force_N;
-    h.normal = n;
-    h.overlap_m = k.overlap_m;
+    out.force_N = fn * n + fs;
+    out.elastic_J = 0.4 * elastic_force * k.overlap_m + 0.5 * law.ks_N_m * xi.squaredNorm();
   } else {
-    h = ContactHistory{};
+    out.force_N.setZero();
+    h.tangential_displacement_m.setZero();  // apart: the spring lets go
   }
+  out.tangential_N = fs;
+
+  // Trapezoids of the forces over the displacements the integrator made this step.
+  out.dissipated_normal_J = 0.5 * (h.normal_damping_force_N + damping_force) * overlap_change_m;
+  out.dissipated_tangential_J = -0.5 * (h.tangential_force_N + fs).dot(slip_m) -
+                                (0.5 * law.ks_N_m * h.tangential_displacement_m.squaredNorm() - spring_energy_before);
+  h.tangential_force_N = fs;
+  h.normal_damping_force_N = damping_force;
+  h.overlap_m = std::max(k.overlap_m, 0.0);
   return out;
 }
 

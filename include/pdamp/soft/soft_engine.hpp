@@ -18,6 +18,10 @@ namespace pdamp::soft {
 struct SoftEngineOptions {
   /// Keep the host still at its initial displacement (the settling phase).
   bool hold_host = false;
+  /// Drag −γ m v on every sphere and −γ I ω on its spin (1/s); only for settling, where
+  /// spheres rolling on the floor would otherwise never stop (the law has no rolling
+  /// resistance). Zero in every run.
+  double settling_drag_1_s = 0.0;
   /// Neighbour-list skin as a fraction of the largest diameter.
   double skin_fraction = 0.1;
 };
@@ -45,7 +49,7 @@ class SoftEngine final : public Engine {
   void compute_forces(double dt_s);
   void add_particle_contacts(double dt_s);
   void add_wall_contacts(double dt_s);
-  void add_host_forces(double dt_s);
+  void add_host_forces();
 
   double host_acceleration_m_s2() const;
   bool moved_beyond_skin() const;
@@ -58,8 +62,10 @@ class SoftEngine final : public Engine {
   double dt_s_;
   double t_s_ = 0.0;
 
-  // Particles (SI), in the initial order.
+  // Particles (SI), in the initial order. Between the kicks v_ and w_ are the half-step
+  // velocities; the predicted end-of-step ones (v + a Δt/2) drive the dashpots.
   std::vector<Eigen::Vector3d> x_, v_, w_, force_, torque_;
+  std::vector<Eigen::Vector3d> v_predicted_, w_predicted_;
   std::vector<double> radius_, mass_, inv_mass_, inv_inertia_;
   NeighbourList neighbours_;
   std::vector<Eigen::Vector3d> x_at_rebuild_;
@@ -69,6 +75,7 @@ class SoftEngine final : public Engine {
 
   // Host.
   HostState host_;
+  double host_v_predicted_m_s_ = 0.0;
   double host_particle_force_N_ = 0.0;  ///< vertical force of the particles on the host
   double host_other_force_N_ = 0.0;     ///< spring, damper and excitation at the current step
   /// The host's forces and positions at the last force computation, for the energy books.

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "pdamp/model/engine.hpp"
+#include "pdamp/model/particles.hpp"
 #include "pdamp/analysis/recorder.hpp"
 #include "pdamp/store/sqlite.hpp"
 
@@ -27,6 +28,14 @@ struct NewRun {
   int n_particles = 0;
   double duration_s = 0.0;
   std::optional<double> dt_s;  ///< time step of a time-stepped engine
+  std::optional<std::int64_t> initial_state_id;  ///< the settled bed the run started from
+};
+
+/// A settled bed kept for other runs (and the other engine) to start from.
+struct StoredInitialState {
+  std::int64_t state_id = 0;
+  Particles particles;
+  double settle_time_s = 0.0;
 };
 
 struct RunEnd {
@@ -62,6 +71,12 @@ class RunStore {
   /// Stores an engine's named totals (replacing earlier values of the same names).
   void save_statistics(std::int64_t run_id, const EngineStatistics& statistics);
   EngineStatistics statistics(std::int64_t run_id);
+
+  /// The bed stored under `settle_key`, if any.
+  std::optional<StoredInitialState> find_initial_state(const std::string& settle_key);
+  std::int64_t save_initial_state(const std::string& settle_key, const Particles& particles, double settle_time_s,
+                                  double kinetic_J, double wall_time_s);
+  Particles load_initial_particles(std::int64_t state_id);
 
   std::vector<RunSummary> list_runs();
   std::optional<RunSummary> summary(std::int64_t run_id);

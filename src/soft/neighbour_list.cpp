@@ -1,6 +1,5 @@
 #include "pdamp/soft/neighbour_list.hpp"
 
-#include <algorithm>
 #include <array>
 
 namespace pdamp::soft {
@@ -12,8 +11,10 @@ void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const
   cells_.build(grid_, cell_positions_);
 
   next_first_.assign(n + 1, 0);
+  old_slot_.assign(n, -1);
   next_partner_.clear();
   next_history_.clear();
+  next_touching_.clear();
   std::array<int, 27> cells{};
   for (int i = 0; i < n; ++i) {
     next_first_[i] = static_cast<int>(next_partner_.size());
@@ -25,20 +26,24 @@ void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const
         if ((positions[i] - positions[j]).squaredNorm() < reach * reach) next_partner_.push_back(j);
       }
     }
-    const auto begin = next_partner_.begin() + next_first_[i];
-    std::sort(begin, next_partner_.end());
-    // Hand over the histories of pairs listed before (both lists are sorted by partner).
-    int old = first_.empty() ? 0 : first_[i];
-    const int old_end = first_.empty() ? 0 : first_[i + 1];
-    for (auto it = begin; it != next_partner_.end(); ++it) {
-      while (old < old_end && partner_[old] < *it) ++old;
-      next_history_.push_back(old < old_end && partner_[old] == *it ? history_[old] : ContactHistory{});
+    // Hand over the histories of pairs listed before: mark i's old partners, look up the new.
+    if (!first_.empty()) {
+      for (int k = first_[i]; k < first_[i + 1]; ++k) old_slot_[partner_[k]] = k;
+    }
+    for (int k = next_first_[i]; k < static_cast<int>(next_partner_.size()); ++k) {
+      const int old = old_slot_[next_partner_[k]];
+      next_history_.push_back(old >= 0 ? history_[old] : ContactHistory{});
+      next_touching_.push_back(old >= 0 ? touching_[old] : 0);
+    }
+    if (!first_.empty()) {
+      for (int k = first_[i]; k < first_[i + 1]; ++k) old_slot_[partner_[k]] = -1;
     }
   }
   next_first_[n] = static_cast<int>(next_partner_.size());
   first_.swap(next_first_);
   partner_.swap(next_partner_);
   history_.swap(next_history_);
+  touching_.swap(next_touching_);
   ++rebuilds_;
 }
 

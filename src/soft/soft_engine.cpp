@@ -31,8 +31,6 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
   v_.resize(n);
   w_.resize(n);
   force_.assign(n, Eigen::Vector3d::Zero());
-  v_predicted_.assign(n, Eigen::Vector3d::Zero());
-  w_predicted_.assign(n, Eigen::Vector3d::Zero());
   torque_.assign(n, Eigen::Vector3d::Zero());
   radius_.resize(n);
   mass_.resize(n);
@@ -49,12 +47,10 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
     inv_inertia_[i] = 1.0 / initial.moment_of_inertia(k);
   }
   for (auto& walls : wall_history_) walls.assign(n, ContactHistory{});
-  v_predicted_ = v_;
-  w_predicted_ = w_;
+  for (auto& walls : wall_touching_) walls.assign(n, 0);
 
   host_ = host_model_.initial_state();
   if (options_.hold_host) host_.v_m_s = 0.0;
-  host_v_predicted_m_s_ = host_.v_m_s;
   ledger_.host_counts = !host_model_.has_infinite_mass();
 
   refresh_neighbours();
@@ -66,13 +62,30 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
 }
 
 void SoftEngine::advance_to(double t_s) {
+  // Velocity Verlet, with the second half-kick of each step and the first of the next
+  // fused into one pass; between calls the velocities are at full steps.
+  double owed_kick_s = 0.0;
   while (t_s_ < t_s) {
-    const double remaining = t_s - t_s_;
-    // Take the remainder as the last step if a full step would overshoot (or leave a sliver).
-    const bool last = remaining <= dt_s_ * (1.0 + 1e-9);
-    step(last ? remaining : dt_s_);
-    if (last) t_s_ = t_s;
+    const double dt = next_step_s(t_s);
+    move(owed_kick_s + 0.5 * dt, dt);
+    refresh_neighbours();
+    compute_forces(dt);
+    owed_kick_s = 0.5 * dt;
+    ++steps_;
   }
+  kick(owed_kick_s);
+  check_particles_inside();
+}
+
+double SoftEngine::next_step_s(double t_s) {
+  // Take the remainder as the last step if a full step would overshoot (or leave a sliver).
+  const double remaining = t_s - t_s_;
+  if (remaining > dt_s_ * (1.0 + 1e-9)) return dt_s_;
+  end_of_advance_s_ = t_s;
+  return remaining;
+}
+
+void SoftEngine::check_particles_inside() const {
   for (std::size_t i = 0; i < x_.size(); ++i) {
     if (!x_[i].allFinite() || cavity_.clearance_m(x_[i], radius_[i], host_.z_m) < -radius_[i]) {
       std::ostringstream msg;
@@ -83,60 +96,53 @@ void SoftEngine::advance_to(double t_s) {
   }
 }
 
-void SoftEngine::step(double dt_s) {
-  kick(0.5 * dt_s);
-  drift(dt_s);
-  refresh_neighbours();
-  compute_forces(dt_s);
-  kick(0.5 * dt_s);
-  ++steps_;
-}
-
 void SoftEngine::kick(double dt_s) {
   for (std::size_t i = 0; i < x_.size(); ++i) {
     v_[i] += force_[i] * (inv_mass_[i] * dt_s);
     w_[i] += torque_[i] * (inv_inertia_[i] * dt_s);
   }
+  if (options_.hold_host) return;
   if (host_model_.has_infinite_mass()) {
     host_.v_m_s = host_model_.prescribed_state(t_s_).v_m_s;
-  } else if (!options_.hold_host) {
+  } else {
     host_.v_m_s += host_acceleration_m_s2() * dt_s;
   }
 }
 
-void SoftEngine::drift(double dt_s) {
-  for (std::size_t i = 0; i < x_.size(); ++i) {
-    x_[i] += v_[i] * dt_s;
-    v_predicted_[i] = v_[i] + force_[i] * (0.5 * inv_mass_[i] * dt_s);
-    w_predicted_[i] = w_[i] + torque_[i] * (0.5 * inv_inertia_[i] * dt_s);
-  }
-  t_s_ += dt_s;
-  if (host_model_.has_infinite_mass()) {
+void SoftEngine::move(double kick_s, double dt_s) {
+  const double t_end = end_of_advance_s_ >= 0.0 ? end_of_advance_s_ : t_s_ + dt_s;
+  end_of_advance_s_ = -1.0;
+  if (options_.hold_host) {
+    // Held still (settling): nothing moves the walls.
+  } else if (host_model_.has_infinite_mass()) {
     // The walls move exactly as prescribed; their mean velocity over the step keeps the
     // contacts' slip consistent with that motion.
-    const HostState prescribed = host_model_.prescribed_state(t_s_);
+    const HostState prescribed = host_model_.prescribed_state(t_end);
     host_.v_m_s = (prescribed.z_m - host_.z_m) / dt_s;
     host_.z_m = prescribed.z_m;
-    host_v_predicted_m_s_ = prescribed.v_m_s;
-  } else if (!options_.hold_host) {
+  } else {
+    host_.v_m_s += host_acceleration_m_s2() * kick_s;
     host_.z_m += host_.v_m_s * dt_s;
-    host_v_predicted_m_s_ = host_.v_m_s + 0.5 * host_acceleration_m_s2() * dt_s;
   }
-}
-
-bool SoftEngine::moved_beyond_skin() const {
-  // Pair distances do not change when the whole bed rides with the host, so displacements
-  // count relative to the host's.
+  t_s_ = t_end;
+  // Kick and drift each sphere in one pass, and see whether any has moved more
+  // than half the skin relative to the host (whose motion changes no pair distance) since
+  // the neighbour list was built.
   const Eigen::Vector3d host_shift(0.0, 0.0, host_.z_m - host_z_at_rebuild_);
   const double limit_sq = 0.25 * neighbours_.skin_m() * neighbours_.skin_m();
+  bool beyond_skin = false;
   for (std::size_t i = 0; i < x_.size(); ++i) {
-    if ((x_[i] - x_at_rebuild_[i] - host_shift).squaredNorm() > limit_sq) return true;
+    v_[i] += force_[i] * (inv_mass_[i] * kick_s);
+    w_[i] += torque_[i] * (inv_inertia_[i] * kick_s);
+    x_[i] += v_[i] * dt_s;
+    beyond_skin |= (x_[i] - x_at_rebuild_[i] - host_shift).squaredNorm() > limit_sq;
   }
-  return false;
+  needs_rebuild_ = beyond_skin;
 }
 
 void SoftEngine::refresh_neighbours() {
-  if (!x_at_rebuild_.empty() && !moved_beyond_skin()) return;
+  if (!needs_rebuild_) return;
+  needs_rebuild_ = false;
   neighbours_.rebuild(x_, radius_);
   x_at_rebuild_ = x_;
   host_z_at_rebuild_ = host_.z_m;
@@ -158,9 +164,8 @@ void SoftEngine::compute_forces(double dt_s) {
 
 void SoftEngine::record_overlap(double overlap_m, double radius_m) {
   ++contacts_;
-  const double ratio = overlap_m / radius_m;
-  if (ratio > max_overlap_ratio_) {
-    max_overlap_ratio_ = ratio;
+  if (overlap_m > max_overlap_ratio_ * radius_m) {
+    max_overlap_ratio_ = overlap_m / radius_m;
     max_overlap_time_s_ = t_s_;
   }
 }
@@ -168,41 +173,46 @@ void SoftEngine::record_overlap(double overlap_m, double radius_m) {
 void SoftEngine::add_particle_contacts(double dt_s) {
   const SoftContactLaw& law = scenario_.soft_particle;
   const int n = static_cast<int>(x_.size());
+  double impact = 0.0, friction = 0.0, elastic = 0.0;
   for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d xi = x_[i];
+    const double ri = radius_[i];
     for (int k = neighbours_.first(i); k < neighbours_.first(i + 1); ++k) {
       const int j = neighbours_.partner(k);
-      const Eigen::Vector3d d = x_[i] - x_[j];
-      const double reach = radius_[i] + radius_[j];
+      const Eigen::Vector3d d = xi - x_[j];
+      const double reach = ri + radius_[j];
       const double distance_sq = d.squaredNorm();
-      ContactHistory& history = neighbours_.history(k);
-      if (distance_sq >= reach * reach && !history.active()) continue;
-      const double distance = std::sqrt(distance_sq);
+      if (distance_sq >= reach * reach && !neighbours_.touching(k)) continue;
+      const double distance = std::sqrt(distance_sq), inverse_distance = 1.0 / distance;
       // The contact point splits the centre distance in the ratio of the radii, so the
       // lever arms add up to the distance and angular momentum is conserved exactly.
-      const double lever_i = radius_[i] * distance / reach, lever_j = radius_[j] * distance / reach;
-      const Eigen::Vector3d normal = d / distance;
-      const ContactKinematics contact{
-          normal, reach - distance, v_[i] - v_[j] - (lever_i * w_[i] + lever_j * w_[j]).cross(normal),
-          v_predicted_[i] - v_predicted_[j] - (lever_i * w_predicted_[i] + lever_j * w_predicted_[j]).cross(normal)};
-      const ContactForce c = evaluate_contact(law, contact, dt_s, history);
+      const double share = distance / reach, lever_i = ri * share, lever_j = radius_[j] * share;
+      const Eigen::Vector3d normal = d * inverse_distance;
+      const ContactKinematics contact{normal, reach - distance,
+                                      v_[i] - v_[j] - (lever_i * w_[i] + lever_j * w_[j]).cross(normal)};
+      const ContactForce c = evaluate_contact(law, contact, dt_s, neighbours_.history(k));
       force_[i] += c.force_N;
       force_[j] -= c.force_N;
-      const Eigen::Vector3d twist = contact.normal.cross(c.tangential_N);
+      const Eigen::Vector3d twist = normal.cross(c.tangential_N);
       torque_[i] -= lever_i * twist;
       torque_[j] -= lever_j * twist;
-      ledger_.dissipated_impact_J += c.dissipated_normal_J;
-      ledger_.dissipated_friction_J += c.dissipated_tangential_J;
-      contact_elastic_J_ += c.elastic_J;
-      if (contact.overlap_m > 0.0) record_overlap(contact.overlap_m, std::min(radius_[i], radius_[j]));
+      impact += c.dissipated_normal_J;
+      friction += c.dissipated_tangential_J;
+      elastic += c.elastic_J;
+      neighbours_.set_touching(k, contact.overlap_m > 0.0);
+      if (contact.overlap_m > 0.0) record_overlap(contact.overlap_m, std::min(ri, radius_[j]));
     }
   }
+  ledger_.dissipated_impact_J += impact;
+  ledger_.dissipated_friction_J += friction;
+  contact_elastic_J_ += elastic;
 }
 
 void SoftEngine::add_wall_contacts(double dt_s) {
   const SoftContactLaw& law = scenario_.soft_wall;
-  const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s), wall_velocity_predicted(0.0, 0.0, host_v_predicted_m_s_);
+  const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s);
   const double wall_reach = cavity_.radius_m();
-  host_particle_force_N_ = 0.0;
+  double impact = 0.0, friction = 0.0, elastic = 0.0, on_host = 0.0;
   for (std::size_t i = 0; i < x_.size(); ++i) {
     const double r = radius_[i];
     const double rho_sq = x_[i].x() * x_[i].x() + x_[i].y() * x_[i].y();
@@ -210,32 +220,35 @@ void SoftEngine::add_wall_contacts(double dt_s) {
     const bool near[3] = {rho_sq > side_limit * side_limit, x_[i].z() - host_.z_m < r,
                           host_.z_m + cavity_.height_m() - x_[i].z() < r};
     for (int wall = side; wall <= top; ++wall) {
-      ContactHistory& history = wall_history_[wall][i];
-      if (!near[wall] && !history.active()) continue;
+      if (!near[wall] && !wall_touching_[wall][i]) continue;
       const WallGap gap = cavity_.gap(static_cast<Wall>(wall), x_[i], r, host_.z_m);
       const double lever = r + std::min(gap.gap_m, 0.0);  // the contact point is on the wall
-      const ContactKinematics contact{gap.normal, -gap.gap_m, v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity,
-                                      v_predicted_[i] - lever * w_predicted_[i].cross(gap.normal) - wall_velocity_predicted};
-      const ContactForce c = evaluate_contact(law, contact, dt_s, history);
+      const ContactKinematics contact{gap.normal, -gap.gap_m, v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity};
+      const ContactForce c = evaluate_contact(law, contact, dt_s, wall_history_[wall][i]);
       force_[i] += c.force_N;
       torque_[i] -= lever * gap.normal.cross(c.tangential_N);
-      host_particle_force_N_ -= c.force_N.z();
-      ledger_.dissipated_impact_J += c.dissipated_normal_J;
-      ledger_.dissipated_friction_J += c.dissipated_tangential_J;
-      contact_elastic_J_ += c.elastic_J;
+      on_host -= c.force_N.z();
+      impact += c.dissipated_normal_J;
+      friction += c.dissipated_tangential_J;
+      elastic += c.elastic_J;
+      wall_touching_[wall][i] = gap.gap_m < 0.0;
       if (gap.gap_m < 0.0) record_overlap(-gap.gap_m, r);
     }
   }
+  host_particle_force_N_ = on_host;
+  ledger_.dissipated_impact_J += impact;
+  ledger_.dissipated_friction_J += friction;
+  contact_elastic_J_ += elastic;
 }
 
 void SoftEngine::add_host_forces() {
   if (options_.hold_host) return;
-  // The forces act at the end of the step, the damper on the predicted velocity; the
-  // books take the trapezoid of each force over the step's displacements.
+  // The forces act at the end of the step (the damper on the half-step velocity, as the
+  // contacts' dashpots); the books take the trapezoid of each over the step's displacements.
   const double y = host_model_.base_position_m(t_s_);
-  const HostForces now{host_.z_m - y, host_v_predicted_m_s_ - host_model_.base_velocity_m_s(t_s_),
+  const HostForces now{host_.z_m - y, host_.v_m_s - host_model_.base_velocity_m_s(t_s_),
                        host_model_.applied_force_N(t_s_), host_particle_force_N_, host_.z_m, y};
-  host_other_force_N_ = host_model_.force_N(t_s_, {host_.z_m, host_v_predicted_m_s_});
+  host_other_force_N_ = host_model_.force_N(t_s_, host_);
   const HostForces& before = previous_host_forces_;
   const double dz = now.z_m - before.z_m, dy = now.base_m - before.base_m;
   if (host_model_.has_infinite_mass()) {

@@ -26,26 +26,22 @@
 
 namespace pdamp::soft {
 
-/// What a contact remembers from one step to the next.
+/// What a contact remembers from one step to the next. (Whether it is open at all is kept
+/// apart, as one byte per pair, so that scanning pairs that do not touch stays cheap.)
 struct ContactHistory {
   Eigen::Vector3d tangential_displacement_m = Eigen::Vector3d::Zero();  ///< ξ
   Eigen::Vector3d tangential_force_N = Eigen::Vector3d::Zero();         ///< f_s applied last step
   double normal_damping_force_N = 0.0;  ///< f_n − k_n δ^{3/2} applied last step (dashpot and clamp)
-  double overlap_m = 0.0;               ///< δ last step; > 0 while in contact
-
-  bool active() const { return overlap_m > 0.0; }
 };
 
 /// How the two bodies meet this step.
 struct ContactKinematics {
   Eigen::Vector3d normal;  ///< unit vector from body j to body i
   double overlap_m;        ///< r_i + r_j − distance; ≤ 0 means apart
-  /// Velocity of i's contact point relative to j's over the step (what the integrator
-  /// moved them by): its tangential part is the slip that loads the tangential spring.
-  Eigen::Vector3d slip_velocity;
-  /// The same at the end of the step, predicted to second order (v + a Δt/2 from the
-  /// half-step velocity): the dashpots act on it, so damping is not half a step late.
-  Eigen::Vector3d damper_velocity;
+  /// Velocity of i's contact point relative to j's over the step (the half-step
+  /// velocities the integrator moved them by): it loads the tangential spring and drives
+  /// the dashpots.
+  Eigen::Vector3d velocity;
 };
 
 /// The force on body i at one contact, and the energy it moved this step.
@@ -57,38 +53,41 @@ struct ContactForce {
   double dissipated_tangential_J = 0.0; ///< this step's friction loss
 };
 
-/// Evaluates one contact for a step of length dt and updates its history; a contact that
-/// has come apart (overlap ≤ 0) is forgotten, its spring's leftover energy booked as friction.
-inline ContactForce evaluate_contact(const SoftContactLaw& law, const ContactKinematics& k, double dt_s,
+/// Evaluates one contact — touching, or open last step — for a step of length dt and
+/// updates its history; a contact that has come apart (overlap ≤ 0) is closed: its books
+/// are balanced (the spring's leftover energy goes to friction) and its history cleared.
+[[gnu::always_inline]] inline ContactForce evaluate_contact(const SoftContactLaw& law, const ContactKinematics& k, double dt_s,
                                      ContactHistory& h) {
   ContactForce out;
   const Eigen::Vector3d& n = k.normal;
-  const double slip_normal = k.slip_velocity.dot(n);
-  const Eigen::Vector3d slip_m = (k.slip_velocity - slip_normal * n) * dt_s;
-  const double overlap_change_m = -slip_normal * dt_s;
+  const double closing_speed = -k.velocity.dot(n);  // δ'
+  const Eigen::Vector3d tangential_velocity = k.velocity + closing_speed * n;
+  const Eigen::Vector3d slip_m = tangential_velocity * dt_s;
+  const double overlap_change_m = closing_speed * dt_s;
   const double spring_energy_before = 0.5 * law.ks_N_m * h.tangential_displacement_m.squaredNorm();
 
   double damping_force = 0.0;
   Eigen::Vector3d fs = Eigen::Vector3d::Zero();
   if (k.overlap_m > 0.0) {
-    const double closing_speed = -k.damper_velocity.dot(n);  // δ'
-    const Eigen::Vector3d tangential_velocity = k.damper_velocity + closing_speed * n;
     const double elastic_force = law.kn_N_m1_5 * k.overlap_m * std::sqrt(k.overlap_m);
     const double fn = std::max(0.0, elastic_force + law.cn_N_s_m * closing_speed);
     damping_force = fn - elastic_force;
 
     Eigen::Vector3d& xi = h.tangential_displacement_m;
-    const double xi_norm = xi.norm();
-    xi -= xi.dot(n) * n;  // onto the current tangent plane ...
-    const double projected = xi.norm();
-    if (projected > 0.0) xi *= xi_norm / projected;  // ... keeping the stored spring energy
+    const double xi_sq = xi.squaredNorm();
+    if (xi_sq > 0.0) {
+      // Onto the current tangent plane, keeping the stored spring energy.
+      const double off_plane = xi.dot(n);
+      const double in_plane_sq = xi_sq - off_plane * off_plane;
+      if (in_plane_sq > 0.0) xi = (xi - off_plane * n) * std::sqrt(xi_sq / in_plane_sq);
+    }
     xi += slip_m;
     fs = -law.ks_N_m * xi - law.cs_N_s_m * tangential_velocity;
     const double cap = law.mu * fn;
-    const double fs_norm = fs.norm();
-    if (fs_norm > cap) {
+    const double fs_sq = fs.squaredNorm();
+    if (fs_sq > cap * cap) {
       // Sliding: the force is capped and the spring keeps only what the capped force allows.
-      fs *= cap / fs_norm;
+      fs *= cap / std::sqrt(fs_sq);
       if (law.ks_N_m > 0.0) xi = -(fs + law.cs_N_s_m * tangential_velocity) / law.ks_N_m;
     }
     out.force_N = fn * n + fs;
@@ -105,7 +104,6 @@ inline ContactForce evaluate_contact(const SoftContactLaw& law, const ContactKin
                                 (0.5 * law.ks_N_m * h.tangential_displacement_m.squaredNorm() - spring_energy_before);
   h.tangential_force_N = fs;
   h.normal_damping_force_N = damping_force;
-  h.overlap_m = std::max(k.overlap_m, 0.0);
   return out;
 }
 

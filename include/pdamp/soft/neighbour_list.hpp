@@ -1,6 +1,6 @@
 #pragma once
 /// Verlet neighbour list with a skin, built on the shared cell grid. Every pair closer
-/// than r_i + r_j + skin is listed (half list: i < j, partners ascending), so no contact
+/// than r_i + r_j + skin is listed (half list: i < j), so no contact
 /// can be missed until some sphere has moved more than skin/2 relative to the host since
 /// the build — the engine rebuilds before that. Each listed pair carries its contact
 /// history, which a rebuild hands over to the new list.
@@ -27,7 +27,9 @@ class NeighbourList {
   int first(int i) const { return first_[i]; }
   int partner(int k) const { return partner_[k]; }
   ContactHistory& history(int k) { return history_[k]; }
-  const ContactHistory& history(int k) const { return history_[k]; }
+  /// Whether pair k was touching after the last force computation.
+  bool touching(int k) const { return touching_[k] != 0; }
+  void set_touching(int k, bool touching) { touching_[k] = touching; }
   long long rebuilds() const { return rebuilds_; }
 
  private:
@@ -37,8 +39,11 @@ class NeighbourList {
   Eigen::Matrix3Xd cell_positions_;
   std::vector<int> first_, partner_;
   std::vector<ContactHistory> history_;
+  std::vector<unsigned char> touching_;
   std::vector<int> next_first_, next_partner_;
   std::vector<ContactHistory> next_history_;
+  std::vector<unsigned char> next_touching_;
+  std::vector<int> old_slot_;  ///< during a rebuild: where partner j of the current i was listed, or −1
   long long rebuilds_ = 0;
 };
 

@@ -23,7 +23,7 @@ struct SoftEngineOptions {
   /// resistance). Zero in every run.
   double settling_drag_1_s = 0.0;
   /// Neighbour-list skin as a fraction of the largest diameter.
-  double skin_fraction = 0.1;
+  double skin_fraction = 0.3;
 };
 
 class SoftEngine final : public Engine {
@@ -41,18 +41,18 @@ class SoftEngine final : public Engine {
   double particle_kinetic_J() const;
 
  private:
-  // One velocity-Verlet step, in named phases.
-  void step(double dt_s);
-  void kick(double dt_s);
-  void drift(double dt_s);
+  // The phases of a velocity-Verlet step (advance_to strings them together).
+  double next_step_s(double t_s);
+  void move(double kick_s, double dt_s);
   void refresh_neighbours();
   void compute_forces(double dt_s);
   void add_particle_contacts(double dt_s);
   void add_wall_contacts(double dt_s);
   void add_host_forces();
+  void kick(double dt_s);
+  void check_particles_inside() const;
 
   double host_acceleration_m_s2() const;
-  bool moved_beyond_skin() const;
   void record_overlap(double overlap_m, double radius_m);
 
   Scenario scenario_;
@@ -61,21 +61,22 @@ class SoftEngine final : public Engine {
   Cavity cavity_;
   double dt_s_;
   double t_s_ = 0.0;
+  double end_of_advance_s_ = -1.0;  ///< set for the step that must end exactly at advance_to's target
 
   // Particles (SI), in the initial order. Between the kicks v_ and w_ are the half-step
-  // velocities; the predicted end-of-step ones (v + a Δt/2) drive the dashpots.
+  // velocities, which the contact forces (dashpots included) are computed with.
   std::vector<Eigen::Vector3d> x_, v_, w_, force_, torque_;
-  std::vector<Eigen::Vector3d> v_predicted_, w_predicted_;
   std::vector<double> radius_, mass_, inv_mass_, inv_inertia_;
   NeighbourList neighbours_;
   std::vector<Eigen::Vector3d> x_at_rebuild_;
+  bool needs_rebuild_ = true;
   double host_z_at_rebuild_ = 0.0;
   /// Contact history of each particle with the side wall, the bottom and the top.
   std::array<std::vector<ContactHistory>, 3> wall_history_;
+  std::array<std::vector<unsigned char>, 3> wall_touching_;
 
   // Host.
   HostState host_;
-  double host_v_predicted_m_s_ = 0.0;
   double host_particle_force_N_ = 0.0;  ///< vertical force of the particles on the host
   double host_other_force_N_ = 0.0;     ///< spring, damper and excitation at the current step
   /// The host's forces and positions at the last force computation, for the energy books.

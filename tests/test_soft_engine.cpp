@@ -1,6 +1,8 @@
 /// The soft-sphere engine against exact and independent results.
 #include <doctest/doctest.h>
 
+#include <omp.h>
+
 #include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
@@ -343,6 +345,25 @@ TEST_CASE("settling: the placement comes to rest on the floor and stays inside t
   // Without gravity there is nothing to settle.
   const Scenario weightless = scenario_from(s.canonical_text, {"gravity.g_m_s2=0"});
   CHECK(settle_bed(weightless, placed).settle_time_s == 0.0);
+}
+
+TEST_CASE("threads: one or two, the results are the same bits") {
+  const Scenario s = load_scenario(test::scenario_file("small"), {"particles.count=150"});
+  const Particles bed = place_particles(s.particles, s.cavity, s.host.z0_m);
+  auto run_on = [&](int threads) {
+    omp_set_num_threads(threads);
+    SoftEngine engine(s, bed);
+    engine.advance_to(0.02);
+    return engine.state();
+  };
+  const int before = omp_get_max_threads();
+  const State one = run_on(1), two = run_on(2);
+  omp_set_num_threads(before);
+  CHECK(one.particles.position_m == two.particles.position_m);
+  CHECK(one.particles.angular_velocity_rad_s == two.particles.angular_velocity_rad_s);
+  CHECK(one.observation.host.z_m == two.observation.host.z_m);
+  CHECK(one.observation.energy.dissipated_friction_J == two.observation.energy.dissipated_friction_J);
+  CHECK(one.observation.energy.contact_elastic_J == two.observation.energy.contact_elastic_J);
 }
 
 TEST_CASE("determinism: the same scenario and bed give bit-identical results") {

@@ -1,5 +1,7 @@
 #include "commands.hpp"
 
+#include <omp.h>
+
 #include <atomic>
 #include <charconv>
 #include <csignal>
@@ -131,7 +133,9 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
     std::cerr << "pdamp: warning: run " << run_id << ": " << warning << "\n";
     outcome.message += (outcome.message.empty() ? "warning: " : "; warning: ") + warning;
   }
-  store.save_statistics(run_id, engine->statistics());
+  EngineStatistics statistics = engine->statistics();
+  statistics.emplace_back("threads", omp_get_max_threads());
+  store.save_statistics(run_id, statistics);
   store.finish_run(run_id, {outcome.status, outcome.message, outcome.sim_time_s, outcome.wall_time_s,
                             outcome.initial_energy_J, outcome.max_energy_balance_rel_err});
   print_summary(store, run_id, std::cout);
@@ -145,6 +149,16 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
 }
 
 int stop_signal_received() { return stop_signal.load(); }
+
+void set_thread_count(const std::string& text) {
+  int threads = 0;
+  const char* end = text.data() + text.size();
+  if (auto [ptr, ec] = std::from_chars(text.data(), end, threads); ec != std::errc() || ptr != end || threads < 1 ||
+                                                                    threads > 1024) {
+    throw InputError("--threads '" + text + "': must be a whole number from 1 to 1024");
+  }
+  omp_set_num_threads(threads);
+}
 
 int list_runs_command(const std::filesystem::path& db) {
   require_existing(db);

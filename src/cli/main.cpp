@@ -82,7 +82,9 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     po::options_description options("pdamp run --scenario FILE --model soft|hard [options]");
     options.add(help).add(scenario_options()).add(db_option());
     options.add_options()("model", po::value<std::string>(), "soft (Hertz DEM) or hard (event-driven)")(
-        "duration", po::value<std::string>(), "simulated time in s (same as --set run.duration_s=S)");
+        "duration", po::value<std::string>(), "simulated time in s (same as --set run.duration_s=S)")(
+        "threads", po::value<std::string>(),
+        "threads for the soft engine (default: one per core); results are the same bits for any number");
     const auto vm = parse(args, options);
     if (vm.count("help")) {
       std::cout << options << "\n";
@@ -91,6 +93,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     }
     ScenarioRequest request = scenario_request(vm, command);
     if (vm.count("duration")) request.overrides.push_back("run.duration_s=" + vm["duration"].as<std::string>());
+    if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
     return run_command(request, required(vm, "model", command), vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0);
   }
   if (command == "runs") {

@@ -131,7 +131,9 @@ void SoftEngine::move(double kick_s, double dt_s) {
   const Eigen::Vector3d host_shift(0.0, 0.0, host_.z_m - host_z_at_rebuild_);
   const double limit_sq = 0.25 * neighbours_.skin_m() * neighbours_.skin_m();
   bool beyond_skin = false;
-  for (std::size_t i = 0; i < x_.size(); ++i) {
+  const int n = static_cast<int>(x_.size());
+#pragma omp parallel for schedule(static) reduction(|| : beyond_skin)
+  for (int i = 0; i < n; ++i) {
     v_[i] += force_[i] * (inv_mass_[i] * kick_s);
     w_[i] += torque_[i] * (inv_inertia_[i] * kick_s);
     x_[i] += v_[i] * dt_s;
@@ -149,96 +151,118 @@ void SoftEngine::refresh_neighbours() {
 }
 
 void SoftEngine::compute_forces(double dt_s) {
-  const Eigen::Vector3d& g = scenario_.gravity_m_s2;
-  const double drag = options_.settling_drag_1_s;
-  for (std::size_t i = 0; i < x_.size(); ++i) {
-    force_[i] = mass_[i] * (g - drag * v_[i]);
-    torque_[i] = -drag / inv_inertia_[i] * w_[i];
+  // Each chunk of spheres is handled by one thread: its own forces, its pairs (whose
+  // reactions on partners are set aside) and its walls. The reactions are then gathered
+  // per sphere, and the chunks' totals added in chunk order — so the result is the same
+  // bits whatever the number of threads.
+  reactions_.resize(neighbours_.size());
+  const int n = static_cast<int>(x_.size());
+  const int chunks = (n + chunk_size - 1) / chunk_size;
+  chunk_totals_.resize(chunks);
+#pragma omp parallel for schedule(static)
+  for (int c = 0; c < chunks; ++c) {
+    ChunkTotals totals;
+    for (int i = c * chunk_size; i < std::min(n, (c + 1) * chunk_size); ++i) {
+      start_forces(i);
+      add_particle_contacts(i, dt_s, totals);
+      add_wall_contacts(i, dt_s, totals);
+    }
+    chunk_totals_[c] = totals;
   }
+#pragma omp parallel for schedule(static)
+  for (int j = 0; j < n; ++j) add_reactions(j);
+
   contact_elastic_J_ = 0.0;
   contacts_ = 0;
-  add_particle_contacts(dt_s);
-  add_wall_contacts(dt_s);
+  host_particle_force_N_ = 0.0;
+  for (const ChunkTotals& t : chunk_totals_) {
+    ledger_.dissipated_impact_J += t.impact_J;
+    ledger_.dissipated_friction_J += t.friction_J;
+    contact_elastic_J_ += t.elastic_J;
+    host_particle_force_N_ += t.on_host_N;
+    contacts_ += t.contacts;
+    if (t.max_overlap_ratio > max_overlap_ratio_) {
+      max_overlap_ratio_ = t.max_overlap_ratio;
+      max_overlap_time_s_ = t_s_;
+    }
+  }
   add_host_forces();
 }
 
-void SoftEngine::record_overlap(double overlap_m, double radius_m) {
-  ++contacts_;
-  if (overlap_m > max_overlap_ratio_ * radius_m) {
-    max_overlap_ratio_ = overlap_m / radius_m;
-    max_overlap_time_s_ = t_s_;
-  }
+void SoftEngine::start_forces(int i) {
+  const double drag = options_.settling_drag_1_s;
+  force_[i] = mass_[i] * (scenario_.gravity_m_s2 - drag * v_[i]);
+  torque_[i] = -drag / inv_inertia_[i] * w_[i];
 }
 
-void SoftEngine::add_particle_contacts(double dt_s) {
+void SoftEngine::ChunkTotals::record_contact(double overlap_m, double radius_m) {
+  ++contacts;
+  max_overlap_ratio = std::max(max_overlap_ratio, overlap_m / radius_m);
+}
+
+void SoftEngine::add_particle_contacts(int i, double dt_s, ChunkTotals& totals) {
   const SoftContactLaw& law = scenario_.soft_particle;
-  const int n = static_cast<int>(x_.size());
-  double impact = 0.0, friction = 0.0, elastic = 0.0;
-  for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d xi = x_[i];
-    const double ri = radius_[i];
-    for (int k = neighbours_.first(i); k < neighbours_.first(i + 1); ++k) {
-      const int j = neighbours_.partner(k);
-      const Eigen::Vector3d d = xi - x_[j];
-      const double reach = ri + radius_[j];
-      const double distance_sq = d.squaredNorm();
-      if (distance_sq >= reach * reach && !neighbours_.touching(k)) continue;
-      const double distance = std::sqrt(distance_sq), inverse_distance = 1.0 / distance;
-      // The contact point splits the centre distance in the ratio of the radii, so the
-      // lever arms add up to the distance and angular momentum is conserved exactly.
-      const double share = distance / reach, lever_i = ri * share, lever_j = radius_[j] * share;
-      const Eigen::Vector3d normal = d * inverse_distance;
-      const ContactKinematics contact{normal, reach - distance,
-                                      v_[i] - v_[j] - (lever_i * w_[i] + lever_j * w_[j]).cross(normal)};
-      const ContactForce c = evaluate_contact(law, contact, dt_s, neighbours_.history(k));
-      force_[i] += c.force_N;
-      force_[j] -= c.force_N;
-      const Eigen::Vector3d twist = normal.cross(c.tangential_N);
-      torque_[i] -= lever_i * twist;
-      torque_[j] -= lever_j * twist;
-      impact += c.dissipated_normal_J;
-      friction += c.dissipated_tangential_J;
-      elastic += c.elastic_J;
-      neighbours_.set_touching(k, contact.overlap_m > 0.0);
-      if (contact.overlap_m > 0.0) record_overlap(contact.overlap_m, std::min(ri, radius_[j]));
-    }
+  const Eigen::Vector3d xi = x_[i];
+  const double ri = radius_[i];
+  for (int k = neighbours_.first(i); k < neighbours_.first(i + 1); ++k) {
+    const int j = neighbours_.partner(k);
+    const Eigen::Vector3d d = xi - x_[j];
+    const double reach = ri + radius_[j];
+    const double distance_sq = d.squaredNorm();
+    if (distance_sq >= reach * reach && !neighbours_.touching(k)) continue;
+    const double distance = std::sqrt(distance_sq);
+    // The contact point splits the centre distance in the ratio of the radii, so the
+    // lever arms add up to the distance and angular momentum is conserved exactly.
+    const double share = distance / reach, lever_i = ri * share, lever_j = radius_[j] * share;
+    const Eigen::Vector3d normal = d * (1.0 / distance);
+    const ContactKinematics contact{normal, reach - distance,
+                                    v_[i] - v_[j] - (lever_i * w_[i] + lever_j * w_[j]).cross(normal)};
+    const ContactForce c = evaluate_contact(law, contact, dt_s, neighbours_.history(k));
+    const Eigen::Vector3d twist = normal.cross(c.tangential_N);
+    force_[i] += c.force_N;
+    torque_[i] -= lever_i * twist;
+    reactions_[k] = {-c.force_N, -lever_j * twist};
+    totals.impact_J += c.dissipated_normal_J;
+    totals.friction_J += c.dissipated_tangential_J;
+    totals.elastic_J += c.elastic_J;
+    const bool touching = contact.overlap_m > 0.0;
+    neighbours_.set_touching(k, touching);
+    if (touching) totals.record_contact(contact.overlap_m, std::min(ri, radius_[j]));
   }
-  ledger_.dissipated_impact_J += impact;
-  ledger_.dissipated_friction_J += friction;
-  contact_elastic_J_ += elastic;
 }
 
-void SoftEngine::add_wall_contacts(double dt_s) {
-  const SoftContactLaw& law = scenario_.soft_wall;
-  const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s);
-  const double wall_reach = cavity_.radius_m();
-  double impact = 0.0, friction = 0.0, elastic = 0.0, on_host = 0.0;
-  for (std::size_t i = 0; i < x_.size(); ++i) {
-    const double r = radius_[i];
-    const double rho_sq = x_[i].x() * x_[i].x() + x_[i].y() * x_[i].y();
-    const double side_limit = wall_reach - r;
-    const bool near[3] = {rho_sq > side_limit * side_limit, x_[i].z() - host_.z_m < r,
-                          host_.z_m + cavity_.height_m() - x_[i].z() < r};
-    for (int wall = side; wall <= top; ++wall) {
-      if (!near[wall] && !wall_touching_[wall][i]) continue;
-      const WallGap gap = cavity_.gap(static_cast<Wall>(wall), x_[i], r, host_.z_m);
-      const double lever = r + std::min(gap.gap_m, 0.0);  // the contact point is on the wall
-      const ContactKinematics contact{gap.normal, -gap.gap_m, v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity};
-      const ContactForce c = evaluate_contact(law, contact, dt_s, wall_history_[wall][i]);
-      force_[i] += c.force_N;
-      torque_[i] -= lever * gap.normal.cross(c.tangential_N);
-      on_host -= c.force_N.z();
-      impact += c.dissipated_normal_J;
-      friction += c.dissipated_tangential_J;
-      elastic += c.elastic_J;
-      wall_touching_[wall][i] = gap.gap_m < 0.0;
-      if (gap.gap_m < 0.0) record_overlap(-gap.gap_m, r);
-    }
+void SoftEngine::add_reactions(int j) {
+  for (int r = neighbours_.partner_first(j); r < neighbours_.partner_first(j + 1); ++r) {
+    const int k = neighbours_.reverse_pair(r);
+    if (!neighbours_.touching(k)) continue;  // apart: no force this step
+    force_[j] += reactions_[k].force_N;
+    torque_[j] += reactions_[k].torque_N_m;
   }
-  host_particle_force_N_ = on_host;
-  ledger_.dissipated_impact_J += impact;
-  ledger_.dissipated_friction_J += friction;
-  contact_elastic_J_ += elastic;
+}
+
+void SoftEngine::add_wall_contacts(int i, double dt_s, ChunkTotals& totals) {
+  const SoftContactLaw& law = scenario_.soft_wall;
+  const double r = radius_[i];
+  const double rho_sq = x_[i].x() * x_[i].x() + x_[i].y() * x_[i].y();
+  const double side_limit = cavity_.radius_m() - r;
+  const bool near[3] = {rho_sq > side_limit * side_limit, x_[i].z() - host_.z_m < r,
+                        host_.z_m + cavity_.height_m() - x_[i].z() < r};
+  const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s);
+  for (int wall = side; wall <= top; ++wall) {
+    if (!near[wall] && !wall_touching_[wall][i]) continue;
+    const WallGap gap = cavity_.gap(static_cast<Wall>(wall), x_[i], r, host_.z_m);
+    const double lever = r + std::min(gap.gap_m, 0.0);  // the contact point is on the wall
+    const ContactKinematics contact{gap.normal, -gap.gap_m, v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity};
+    const ContactForce c = evaluate_contact(law, contact, dt_s, wall_history_[wall][i]);
+    force_[i] += c.force_N;
+    torque_[i] -= lever * gap.normal.cross(c.tangential_N);
+    totals.on_host_N -= c.force_N.z();
+    totals.impact_J += c.dissipated_normal_J;
+    totals.friction_J += c.dissipated_tangential_J;
+    totals.elastic_J += c.elastic_J;
+    wall_touching_[wall][i] = gap.gap_m < 0.0;
+    if (gap.gap_m < 0.0) totals.record_contact(-gap.gap_m, r);
+  }
 }
 
 void SoftEngine::add_host_forces() {

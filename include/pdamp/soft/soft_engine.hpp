@@ -46,14 +46,24 @@ class SoftEngine final : public Engine {
   void move(double kick_s, double dt_s);
   void refresh_neighbours();
   void compute_forces(double dt_s);
-  void add_particle_contacts(double dt_s);
-  void add_wall_contacts(double dt_s);
   void add_host_forces();
   void kick(double dt_s);
   void check_particles_inside() const;
 
   double host_acceleration_m_s2() const;
-  void record_overlap(double overlap_m, double radius_m);
+
+  /// What one chunk of spheres adds up in a force computation.
+  struct ChunkTotals {
+    double impact_J = 0.0, friction_J = 0.0, elastic_J = 0.0, on_host_N = 0.0, max_overlap_ratio = 0.0;
+    std::int64_t contacts = 0;
+    void record_contact(double overlap_m, double radius_m);
+  };
+  /// Spheres per chunk: fixed, so that sums are formed in the same order on any number of threads.
+  static constexpr int chunk_size = 64;
+  void start_forces(int i);
+  void add_particle_contacts(int i, double dt_s, ChunkTotals& totals);
+  void add_wall_contacts(int i, double dt_s, ChunkTotals& totals);
+  void add_reactions(int j);
 
   Scenario scenario_;
   SoftEngineOptions options_;
@@ -68,6 +78,12 @@ class SoftEngine final : public Engine {
   std::vector<Eigen::Vector3d> x_, v_, w_, force_, torque_;
   std::vector<double> radius_, mass_, inv_mass_, inv_inertia_;
   NeighbourList neighbours_;
+  /// The force and torque each pair's contact puts on its partner, gathered after the pairs.
+  struct Reaction {
+    Eigen::Vector3d force_N, torque_N_m;
+  };
+  std::vector<Reaction> reactions_;
+  std::vector<ChunkTotals> chunk_totals_;
   std::vector<Eigen::Vector3d> x_at_rebuild_;
   bool needs_rebuild_ = true;
   double host_z_at_rebuild_ = 0.0;

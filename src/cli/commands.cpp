@@ -1,6 +1,7 @@
 #include "commands.hpp"
 
 #include <omp.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <charconv>
@@ -14,6 +15,7 @@
 #include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
+#include "pdamp/soft/time_step.hpp"
 #include "pdamp/store/run_store.hpp"
 
 namespace pdamp {
@@ -135,6 +137,9 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
   }
   EngineStatistics statistics = engine->statistics();
   statistics.emplace_back("threads", omp_get_max_threads());
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  statistics.emplace_back("peak_memory_kB", usage.ru_maxrss);
   store.save_statistics(run_id, statistics);
   store.finish_run(run_id, {outcome.status, outcome.message, outcome.sim_time_s, outcome.wall_time_s,
                             outcome.initial_energy_J, outcome.max_energy_balance_rel_err});
@@ -190,7 +195,14 @@ int show_run_command(const std::string& run_id_text, const std::filesystem::path
 int check_command(const ScenarioRequest& request) {
   const Scenario scenario = load_scenario(request.file, request.overrides);
   std::cout << "# scenario '" << scenario.name << "' is valid; every key with its resolved value:\n"
-            << scenario.canonical_text;
+            << scenario.canonical_text << "\n";
+  if (scenario.particles.count > 0) {
+    const double dt = soft::choose_time_step_s(scenario);
+    std::cout << "# soft engine time step: " << dt << " s (" << (scenario.run.dt_s ? "given" : "automatic")
+              << "); shortest Hertz contact " << soft::shortest_contact_time_s(scenario)
+              << " s at the fastest impact, " << soft::max_impact_speed_m_s(scenario)
+              << " m/s; tangential spring period " << soft::shortest_tangential_period_s(scenario) << " s\n";
+  }
   return 0;
 }
 

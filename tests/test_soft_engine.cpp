@@ -348,12 +348,16 @@ TEST_CASE("settling: the placement comes to rest on the floor and stays inside t
 }
 
 TEST_CASE("threads: one or two, the results are the same bits") {
-  const Scenario s = load_scenario(test::scenario_file("small"), {"particles.count=150"});
-  const Particles bed = place_particles(s.particles, s.cavity, s.host.z0_m);
+  // Enough spheres for the engine to share the work (SoftEngine::parallel_minimum).
+  const Scenario s = load_scenario(test::scenario_file("small"),
+                                   {"particles.count=600", "particles.diameter_m=0.001", "cavity.diameter_m=0.016"});
+  Particles bed = place_particles(s.particles, s.cavity, s.host.z0_m);
+  bed.velocity_m_s = Eigen::Matrix3Xd::Random(3, bed.size());  // collisions from the first step
   auto run_on = [&](int threads) {
     omp_set_num_threads(threads);
     SoftEngine engine(s, bed);
-    engine.advance_to(0.02);
+    engine.advance_to(1000 * engine.time_step_s());
+    CHECK(engine.observe().counters.contacts > 50);
     return engine.state();
   };
   const int before = omp_get_max_threads();

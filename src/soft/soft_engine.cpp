@@ -132,7 +132,7 @@ void SoftEngine::move(double kick_s, double dt_s) {
   const double limit_sq = 0.25 * neighbours_.skin_m() * neighbours_.skin_m();
   bool beyond_skin = false;
   const int n = static_cast<int>(x_.size());
-#pragma omp parallel for schedule(static) reduction(|| : beyond_skin)
+#pragma omp parallel for schedule(static) reduction(|| : beyond_skin) if (n >= parallel_minimum)
   for (int i = 0; i < n; ++i) {
     v_[i] += force_[i] * (inv_mass_[i] * kick_s);
     w_[i] += torque_[i] * (inv_inertia_[i] * kick_s);
@@ -159,7 +159,7 @@ void SoftEngine::compute_forces(double dt_s) {
   const int n = static_cast<int>(x_.size());
   const int chunks = (n + chunk_size - 1) / chunk_size;
   chunk_totals_.resize(chunks);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= parallel_minimum)
   for (int c = 0; c < chunks; ++c) {
     ChunkTotals totals;
     for (int i = c * chunk_size; i < std::min(n, (c + 1) * chunk_size); ++i) {
@@ -169,7 +169,7 @@ void SoftEngine::compute_forces(double dt_s) {
     }
     chunk_totals_[c] = totals;
   }
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= parallel_minimum)
   for (int j = 0; j < n; ++j) add_reactions(j);
 
   contact_elastic_J_ = 0.0;

@@ -74,6 +74,12 @@ struct HardContactLaw {
   double beta0 = 0.35;  ///< Walton's typical value for metal spheres
 };
 
+/// Where the hard-sphere engine takes e_n and β0 from.
+enum class HardRestitution {
+  constant,    ///< the [hard] and [hard_wall] values
+  calibrated,  ///< e_n(v), β0(v) of the soft law, from isolated soft collisions (compare/calibration.hpp)
+};
+
 struct RunSettings {
   double duration_s = 1.5;
   double sample_interval_s = 1e-3;
@@ -91,6 +97,7 @@ struct Scenario {
   SoftContactLaw soft_wall;      ///< particle–wall (defaults to the particle–particle law)
   HardContactLaw hard_particle;
   HardContactLaw hard_wall;
+  HardRestitution hard_restitution = HardRestitution::constant;
   RunSettings run;
 
   /// Every key with its resolved value, in scenario-file syntax. Loading this text

@@ -60,6 +60,8 @@ class SoftEngine final : public Engine {
   };
   /// Spheres per chunk: fixed, so that sums are formed in the same order on any number of threads.
   static constexpr int chunk_size = 64;
+  /// Below this many spheres a step is too short to share between threads.
+  static constexpr int parallel_minimum = 512;
   void start_forces(int i);
   void add_particle_contacts(int i, double dt_s, ChunkTotals& totals);
   void add_wall_contacts(int i, double dt_s, ChunkTotals& totals);

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "pdamp/compare/calibration.hpp"
+#include "pdamp/sim/calibration.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;

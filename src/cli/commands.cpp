@@ -1,7 +1,6 @@
 #include "commands.hpp"
 
 #include <omp.h>
-#include <sys/resource.h>
 
 #include <atomic>
 #include <charconv>
@@ -15,6 +14,7 @@
 #include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
+#include "pdamp/sim/stored_run.hpp"
 #include "pdamp/soft/time_step.hpp"
 #include "pdamp/store/run_store.hpp"
 
@@ -99,6 +99,28 @@ InitialBed prepare_bed(const Scenario& scenario, RunStore& store, bool show_prog
   return bed;
 }
 
+RunControl run_control(const Scenario& scenario, bool show_progress) {
+  RunControl control;
+  control.stop = &stop_requested;
+  if (show_progress) {
+    control.progress = [duration = scenario.run.duration_s](double t) {
+      std::fprintf(stderr, "\r  t = %.4f of %.4f s", t, duration);
+      std::fflush(stderr);
+    };
+  }
+  return control;
+}
+
+int exit_code(const StoredRun& run) {
+  switch (run.outcome.status) {
+    case RunStatus::completed: return 0;
+    case RunStatus::interrupted: return 128 + stop_signal.load();
+    default: break;
+  }
+  std::cerr << "pdamp: run " << run.run_id << " failed: " << run.outcome.message << "\n";
+  return 1;
+}
+
 }  // namespace
 
 int run_command(const ScenarioRequest& request, const std::string& model_name, const std::filesystem::path& db,
@@ -111,46 +133,11 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
   RunStore store(db);
   install_stop_handlers();
   const InitialBed bed = prepare_bed(scenario, store, show_progress);
-  auto engine = make_engine(model, scenario, bed.particles);
-  const std::int64_t run_id = store.begin_run(
-      {std::string(to_string(model)), scenario.name, scenario.canonical_text, scenario.particles.seed,
-       scenario.particles.count, scenario.run.duration_s,
-       engine->time_step_s() > 0 ? std::optional(engine->time_step_s()) : std::nullopt, bed.state_id});
-  RunControl control;
-  control.stop = &stop_requested;
-  if (show_progress) {
-    control.progress = [&](double t) {
-      std::fprintf(stderr, "\r  run %lld: t = %.4f of %.4f s", static_cast<long long>(run_id), t,
-                   scenario.run.duration_s);
-      std::fflush(stderr);
-    };
-  }
-  RunOutcome outcome;
-  {
-    RunWriter writer(store, run_id);
-    outcome = run_simulation(*engine, scenario, writer, control);
-  }
+  const StoredRun run = run_and_store(store, model, scenario, bed, run_control(scenario, show_progress),
+                                      [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; });
   if (show_progress) std::fputs("\n", stderr);
-  for (const auto& warning : engine->warnings()) {
-    std::cerr << "pdamp: warning: run " << run_id << ": " << warning << "\n";
-    outcome.message += (outcome.message.empty() ? "warning: " : "; warning: ") + warning;
-  }
-  EngineStatistics statistics = engine->statistics();
-  statistics.emplace_back("threads", omp_get_max_threads());
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  statistics.emplace_back("peak_memory_kB", usage.ru_maxrss);
-  store.save_statistics(run_id, statistics);
-  store.finish_run(run_id, {outcome.status, outcome.message, outcome.sim_time_s, outcome.wall_time_s,
-                            outcome.initial_energy_J, outcome.max_energy_balance_rel_err});
-  print_summary(store, run_id, std::cout);
-  switch (outcome.status) {
-    case RunStatus::completed: return 0;
-    case RunStatus::interrupted: return 128 + stop_signal_received();
-    default: break;
-  }
-  std::cerr << "pdamp: run " << run_id << " failed: " << outcome.message << "\n";
-  return 1;
+  print_summary(store, run.run_id, std::cout);
+  return exit_code(run);
 }
 
 int stop_signal_received() { return stop_signal.load(); }

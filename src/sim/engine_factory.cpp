@@ -31,7 +31,9 @@ void check_model_can_run(Model model, const Scenario& scenario) {
   if (model == Model::hard) hard_engine_missing();
 }
 
-std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial) {
+std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial,
+                                    const RestitutionTable* calibration) {
+  (void)calibration;  // taken by the hard engine
   if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
   if (model == Model::soft) return std::make_unique<soft::SoftEngine>(scenario, initial);
   hard_engine_missing();

@@ -200,6 +200,23 @@ void RunStore::save_statistics(std::int64_t run_id, const EngineStatistics& stat
   transaction.commit();
 }
 
+void RunStore::save_calibration(std::int64_t run_id, const RestitutionTable& table) {
+  sqlite::Transaction transaction(db_);
+  sqlite::Statement insert(db_,
+                           "INSERT INTO calibrations (run_id, contact, impact_speed_m_s, en, beta0) VALUES (?, ?, ?, ?, ?)");
+  for (const auto& [contact, curve] : {std::pair{"sphere_sphere", &table.sphere_sphere}, std::pair{"sphere_wall", &table.sphere_wall}}) {
+    for (std::size_t k = 0; k < curve->impact_speed_m_s.size(); ++k) {
+      insert.bind(1, run_id)
+          .bind(2, std::string_view(contact))
+          .bind(3, curve->impact_speed_m_s[k])
+          .bind(4, curve->en[k])
+          .bind(5, curve->beta0[k])
+          .run();
+    }
+  }
+  transaction.commit();
+}
+
 EngineStatistics RunStore::statistics(std::int64_t run_id) {
   sqlite::Statement query(db_, "SELECT name, value FROM run_statistics WHERE run_id = ? ORDER BY name");
   query.bind(1, run_id);

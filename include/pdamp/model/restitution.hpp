@@ -1,6 +1,6 @@
 #pragma once
 /// Restitution of a contact as a function of impact speed: what the soft contact law does
-/// to an isolated collision, tabulated for the hard-sphere engine (compare/calibration.hpp).
+/// to an isolated collision, tabulated for the hard-sphere engine (sim/calibration.hpp).
 
 #include <vector>
 

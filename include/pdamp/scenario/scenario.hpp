@@ -77,7 +77,7 @@ struct HardContactLaw {
 /// Where the hard-sphere engine takes e_n and β0 from.
 enum class HardRestitution {
   constant,    ///< the [hard] and [hard_wall] values
-  calibrated,  ///< e_n(v), β0(v) of the soft law, from isolated soft collisions (compare/calibration.hpp)
+  calibrated,  ///< e_n(v), β0(v) of the soft law, from isolated soft collisions (sim/calibration.hpp)
 };
 
 struct RunSettings {

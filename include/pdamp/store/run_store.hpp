@@ -12,6 +12,7 @@
 
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
+#include "pdamp/model/restitution.hpp"
 #include "pdamp/analysis/recorder.hpp"
 #include "pdamp/store/sqlite.hpp"
 
@@ -68,6 +69,9 @@ class RunStore {
 
   std::int64_t begin_run(const NewRun& run);
   void finish_run(std::int64_t run_id, const RunEnd& end);
+  /// The restitution table a hard run used.
+  void save_calibration(std::int64_t run_id, const RestitutionTable& table);
+
   /// Stores an engine's named totals (replacing earlier values of the same names).
   void save_statistics(std::int64_t run_id, const EngineStatistics& statistics);
   EngineStatistics statistics(std::int64_t run_id);

@@ -1,4 +1,4 @@
-#include "pdamp/compare/calibration.hpp"
+#include "pdamp/sim/calibration.hpp"
 
 #include <Eigen/Geometry>
 #include <cmath>

@@ -15,6 +15,7 @@
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/sim/stored_run.hpp"
+#include "pdamp/compare/comparison.hpp"
 #include "pdamp/soft/time_step.hpp"
 #include "pdamp/store/run_store.hpp"
 
@@ -138,6 +139,71 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
   if (show_progress) std::fputs("\n", stderr);
   print_summary(store, run.run_id, std::cout);
   return exit_code(run);
+}
+
+namespace {
+
+std::string cell(const std::optional<double>& value, int precision = 4) { return format_optional(value, precision); }
+
+void print_comparison(RunStore& store, std::int64_t id, const ComparisonRecord& c, std::ostream& out) {
+  auto psi_peak = [&](std::int64_t run) {
+    sqlite::Statement q(store.database(), "SELECT psi, gamma FROM cycles WHERE run_id = ? ORDER BY psi DESC LIMIT 1");
+    q.bind(1, run);
+    return q.step() ? format_optional(q.column_double(0), 3) + " (Gamma " + format_optional(q.column_optional_double(1), 3) + ")"
+                    : std::string("-");
+  };
+  auto row = [&](const std::string& name, const std::string& soft, const std::string& hard, const std::string& note = "") {
+    out << "  " << std::left << std::setw(32) << name << std::setw(20) << soft << std::setw(20) << hard << note << "\n";
+  };
+  const auto energy_end = c.energy.end() - 2;  // the last time: soft then hard
+  out << "comparison " << id << ": scenario '" << c.scenario_name << "', soft run " << c.soft_run_id << ", hard run "
+      << c.hard_run_id << ", hard restitution " << c.hard_restitution << "\n";
+  row("", "soft", "hard");
+  row("wall time (s)", cell(c.wall_time_soft_s), cell(c.wall_time_hard_s), "soft/hard " + cell(c.wall_time_ratio, 3));
+  row("time steps / collisions", std::to_string(c.soft_steps), std::to_string(c.hard_events));
+  row("dissipated at t = " + cell(energy_end->t_s) + " s (J)", "", "");
+  row("  impact", cell(energy_end->impact_J), cell((energy_end + 1)->impact_J));
+  row("  friction", cell(energy_end->friction_J), cell((energy_end + 1)->friction_J));
+  row("  viscous", cell(energy_end->viscous_J), cell((energy_end + 1)->viscous_J));
+  row("  total", cell(c.dissipated_soft_J), cell(c.dissipated_hard_J), "hard vs soft " + cell(c.dissipated_rel_diff, 3));
+  row("psi peak (at Gamma)", psi_peak(c.soft_run_id), psi_peak(c.hard_run_id));
+  row("frequency once Gamma < 1 (Hz)", cell(c.small_amplitude_freq_soft_hz), cell(c.small_amplitude_freq_hard_hz));
+  row("Gamma < 1 from (s)", cell(c.gamma_below_1_soft_s), cell(c.gamma_below_1_hard_s));
+  out << "  envelope difference (of the first amplitude): max " << cell(c.envelope_max_rel_diff, 3) << ", rms "
+      << cell(c.envelope_rms_rel_diff, 3) << "\n  psi(Gamma) mean |difference| over Gamma bins: "
+      << cell(c.psi_mean_abs_diff, 3) << "\n";
+}
+
+}  // namespace
+
+int compare_command(const ScenarioRequest& request, const std::filesystem::path& db, bool show_progress) {
+  const Scenario scenario = load_scenario(request.file, request.overrides);
+  check_model_can_run(Model::soft, scenario);
+  check_model_can_run(Model::hard, scenario);
+
+  RunStore store(db);
+  install_stop_handlers();
+  const InitialBed bed = prepare_bed(scenario, store, show_progress);
+  auto warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
+  const RunControl control = run_control(scenario, show_progress);
+  std::int64_t run_ids[2] = {0, 0};
+  for (const Model model : {Model::soft, Model::hard}) {
+    if (show_progress) std::cerr << "pdamp: " << to_string(model) << " model\n";
+    const StoredRun run = run_and_store(store, model, scenario, bed, control, warn);
+    if (show_progress) std::fputs("\n", stderr);
+    run_ids[model == Model::hard] = run.run_id;
+    if (run.outcome.status != RunStatus::completed) {
+      print_summary(store, run.run_id, std::cout);
+      return exit_code(run);
+    }
+  }
+  ComparisonRecord comparison = compare_stored_runs(store, run_ids[0], run_ids[1]);
+  comparison.scenario_name = scenario.name;
+  comparison.initial_state_id = bed.state_id;
+  comparison.hard_restitution = scenario.hard_restitution == HardRestitution::calibrated ? "calibrated" : "constant";
+  const std::int64_t id = store.save_comparison(comparison);
+  print_comparison(store, id, comparison, std::cout);
+  return 0;
 }
 
 int stop_signal_received() { return stop_signal.load(); }

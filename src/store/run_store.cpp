@@ -225,6 +225,54 @@ EngineStatistics RunStore::statistics(std::int64_t run_id) {
   return result;
 }
 
+std::int64_t RunStore::save_comparison(const ComparisonRecord& c) {
+  sqlite::Transaction transaction(db_);
+  sqlite::Statement row(db_,
+                        "INSERT INTO comparisons (scenario_name, soft_run_id, hard_run_id, initial_state_id, "
+                        "hard_restitution, created_at, envelope_max_rel_diff, envelope_rms_rel_diff, "
+                        "small_amplitude_freq_soft_hz, small_amplitude_freq_hard_hz, gamma_below_1_soft_s, "
+                        "gamma_below_1_hard_s, psi_mean_abs_diff, dissipated_soft_J, dissipated_hard_J, "
+                        "dissipated_rel_diff, wall_time_soft_s, wall_time_hard_s, wall_time_ratio, soft_steps, "
+                        "hard_events) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  row.bind(1, c.scenario_name).bind(2, c.soft_run_id).bind(3, c.hard_run_id);
+  if (c.initial_state_id) row.bind(4, *c.initial_state_id);
+  row.bind(5, c.hard_restitution)
+      .bind(6, utc_now_iso8601())
+      .bind(7, c.envelope_max_rel_diff)
+      .bind(8, c.envelope_rms_rel_diff)
+      .bind(9, c.small_amplitude_freq_soft_hz)
+      .bind(10, c.small_amplitude_freq_hard_hz)
+      .bind(11, c.gamma_below_1_soft_s)
+      .bind(12, c.gamma_below_1_hard_s)
+      .bind(13, c.psi_mean_abs_diff)
+      .bind(14, c.dissipated_soft_J)
+      .bind(15, c.dissipated_hard_J)
+      .bind(16, c.dissipated_rel_diff)
+      .bind(17, c.wall_time_soft_s)
+      .bind(18, c.wall_time_hard_s)
+      .bind(19, c.wall_time_ratio)
+      .bind(20, c.soft_steps)
+      .bind(21, c.hard_events);
+  row.run();
+  const std::int64_t id = db_.last_insert_rowid();
+  sqlite::Statement bin(db_,
+                        "INSERT INTO comparison_psi_bins (comparison_id, gamma_low, gamma_high, psi_soft, psi_hard, "
+                        "cycles_soft, cycles_hard) VALUES (?, ?, ?, ?, ?, ?, ?)");
+  for (const auto& b : c.psi_bins) {
+    bin.bind(1, id).bind(2, b.gamma_low).bind(3, b.gamma_high).bind(4, b.psi_soft).bind(5, b.psi_hard);
+    bin.bind(6, b.cycles_soft).bind(7, b.cycles_hard).run();
+  }
+  sqlite::Statement energy(db_,
+                           "INSERT INTO comparison_energy (comparison_id, t_s, model, impact_J, friction_J, viscous_J) "
+                           "VALUES (?, ?, ?, ?, ?, ?)");
+  for (const auto& e : c.energy) {
+    energy.bind(1, id).bind(2, e.t_s).bind(3, e.model).bind(4, e.impact_J).bind(5, e.friction_J).bind(6, e.viscous_J);
+    energy.run();
+  }
+  transaction.commit();
+  return id;
+}
+
 std::vector<RunSummary> RunStore::list_runs() {
   sqlite::Statement query(db_, std::string(summary_columns) + " ORDER BY run_id");
   std::vector<RunSummary> runs;

@@ -59,6 +59,36 @@ struct RunSummary {
   std::optional<double> dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J;
 };
 
+/// One row of `comparisons` with its ψ bins and energies at fixed times.
+struct ComparisonRecord {
+  std::string scenario_name;
+  std::int64_t soft_run_id = 0, hard_run_id = 0;
+  std::optional<std::int64_t> initial_state_id;
+  std::string hard_restitution;
+  std::optional<double> envelope_max_rel_diff, envelope_rms_rel_diff;
+  std::optional<double> small_amplitude_freq_soft_hz, small_amplitude_freq_hard_hz;
+  std::optional<double> gamma_below_1_soft_s, gamma_below_1_hard_s;
+  std::optional<double> psi_mean_abs_diff;
+  double dissipated_soft_J = 0.0, dissipated_hard_J = 0.0;
+  std::optional<double> dissipated_rel_diff;
+  double wall_time_soft_s = 0.0, wall_time_hard_s = 0.0;
+  std::optional<double> wall_time_ratio;
+  std::int64_t soft_steps = 0, hard_events = 0;
+
+  struct PsiBin {
+    double gamma_low, gamma_high;
+    std::optional<double> psi_soft, psi_hard;
+    int cycles_soft, cycles_hard;
+  };
+  std::vector<PsiBin> psi_bins;
+  struct Energy {
+    double t_s;
+    std::string model;
+    double impact_J, friction_J, viscous_J;
+  };
+  std::vector<Energy> energy;
+};
+
 class RunStore {
  public:
   /// Opens or creates the store and migrates it to the current schema. Throws
@@ -81,6 +111,8 @@ class RunStore {
   std::int64_t save_initial_state(const std::string& settle_key, const Particles& particles, double settle_time_s,
                                   double kinetic_J, double wall_time_s);
   Particles load_initial_particles(std::int64_t state_id);
+
+  std::int64_t save_comparison(const ComparisonRecord& comparison);
 
   std::vector<RunSummary> list_runs();
   std::optional<RunSummary> summary(std::int64_t run_id);

@@ -342,6 +342,12 @@ TEST_CASE("settling: the placement comes to rest on the floor and stays inside t
   }
   // 150 spheres of 0.88 mm fill well under half of the 8 mm hole once settled.
   CHECK(top < 0.004);
+  // The bed rests on overlaps of a tiny fraction of a radius; separating them for a hard-
+  // sphere start moves no sphere by as much as 1 % of a radius (the overlaps of ~5 layers add up).
+  Particles hard_start = bed.particles;
+  const double moved = separate_overlaps(hard_start, s.cavity, s.host.z0_m);
+  CHECK(moved > 0.0);
+  CHECK(moved < 0.01 * 0.00044);
   // Without gravity there is nothing to settle.
   const Scenario weightless = scenario_from(s.canonical_text, {"gravity.g_m_s2=0"});
   CHECK(settle_bed(weightless, placed).settle_time_s == 0.0);

@@ -137,6 +137,7 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
       {{"run", "--scenario", table1(), "--model", "soft", "--bogus", "--db", db.string()}, "bogus"},
       {{"frobnicate"}, "unknown command"},
       {{"show", "abc", "--db", db.string()}, "RUN_ID 'abc'"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--threads", "0", "--db", db.string()}, "--threads '0'"},
       {{"runs", "--db", (dir / "missing.sqlite").string()}, "does not exist"},
   };
   for (const auto& c : cases) {

@@ -84,6 +84,7 @@ TEST_CASE("bad values are rejected with the key, the value and what is valid") {
       {"[run]\ndt_s = fast\n", "run.dt_s", "'fast'", "'auto'"},
       {"[run]\nsample_interval_s = 3\n", "run.sample_interval_s", "'3'", "run.duration_s"},
       {"[excitation]\nmode = shake\n", "excitation.mode", "'shake'", "free, base, force, prescribed"},
+      {"[hard]\nrestitution = fitted\n", "hard.restitution", "'fitted'", "constant or calibrated"},
       {"[particles]\ndiameter_m = 0.03\n", "particles.diameter_m", "'0.03'", "do not fit"},
       {"[particles]\ncount = 100000\n", "particles.count", "'100000'", "at most"},
   };

@@ -3,6 +3,7 @@
 #include <fstream>
 
 #include "pdamp/errors.hpp"
+#include "../src/store/schema.hpp"
 #include "pdamp/store/run_store.hpp"
 #include "test_support.hpp"
 
@@ -10,7 +11,7 @@ using namespace pdamp;
 
 namespace {
 
-NewRun a_run() { return {"soft", "unit", "[host]\nmass_kg = 1\n", 7, 10, 1.0, 2.5e-6}; }
+NewRun a_run() { return {"soft", "unit", "[host]\nmass_kg = 1\n", 7, 10, 1.0, 2.5e-6, std::nullopt}; }
 
 Observation sample_at(double t) {
   Observation o;
@@ -132,10 +133,13 @@ TEST_CASE("an older store is migrated forward and keeps its runs") {
   const auto file = dir / "old.sqlite";
   std::int64_t id = 0;
   {
-    RunStore store(file);
-    id = store.begin_run(a_run());
-    // Make it look like a version-1 store: drop what later migrations added.
-    store.database().exec("DROP TABLE run_statistics; PRAGMA user_version = 1");
+    // A store as the first schema left it, with one run.
+    sqlite::Database v1(file);
+    v1.exec(schema::migrations()[0]);
+    v1.exec("PRAGMA user_version = 1");
+    v1.exec("INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, pdamp_version, "
+            "status, started_at) VALUES ('soft', 'old', '', 1, 0, 1.0, '0.0.1', 'completed', '2026-01-01T00:00:00Z')");
+    id = v1.last_insert_rowid();
   }
   RunStore store(file);
   sqlite::Statement version(store.database(), "PRAGMA user_version");

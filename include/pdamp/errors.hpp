@@ -19,3 +19,13 @@ class RuntimeFailure : public std::runtime_error {
 };
 
 }  // namespace pdamp
+
+namespace pdamp {
+
+/// The user asked to stop (SIGINT, SIGTERM) before a run began (e.g. while settling).
+class Interrupted : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace pdamp

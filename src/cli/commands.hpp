@@ -18,5 +18,11 @@ int run_command(const ScenarioRequest& request, const std::string& model, const 
 int list_runs_command(const std::filesystem::path& db);
 int show_run_command(const std::string& run_id, const std::filesystem::path& db);
 int check_command(const ScenarioRequest& request);
+int compare_command(const ScenarioRequest& request, const std::filesystem::path& db, bool show_progress);
+/// Sets the number of threads (--threads); throws InputError unless it is 1 to 1024.
+void set_thread_count(const std::string& text);
+
+/// The signal that asked a run to stop (0 if none).
+int stop_signal_received();
 
 }  // namespace pdamp

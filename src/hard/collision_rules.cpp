@@ -28,7 +28,8 @@ Eigen::Vector3d solve_mobility(const Mobility& m, const Eigen::Vector3d& n, cons
 }  // namespace
 
 CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double u_n,
-                                  const Mobility& mobility, const HardContactLaw& law, double restitution) {
+                                  const Mobility& mobility, const HardContactLaw& law) {
+  const double restitution = law.en;
   CollisionOutcome out;
   if (!(u_n > 0.0)) return out;
   const Eigen::Vector3d u_t = u - u.dot(n) * n;

@@ -24,11 +24,12 @@ const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 
 }  // namespace
 
-HardEngine::HardEngine(const Scenario& scenario, const Particles& initial)
+HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const RestitutionTable* calibration)
     : gravity_m_s2_(scenario.gravity_m_s2),
       sphere_law_(scenario.hard_particle),
       wall_law_(scenario.hard_wall),
       resting_(scenario.hard_resting),
+      calibration_(calibration ? std::optional<RestitutionTable>(*calibration) : std::nullopt),
       cavity_(scenario.cavity),
       host_model_(scenario),
       fastest_host_rate_1_s_(std::max(scenario.excitation.angular_frequency_rad_s(),
@@ -459,13 +460,20 @@ void HardEngine::handle(const Event& e) {
   }
 }
 
-double HardEngine::restitution(double approach_speed_m_s, const HardContactLaw& law, int i, int j) {
+HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, int j) {
+  HardContactLaw law = wall ? wall_law_ : sphere_law_;
+  if (calibration_) {
+    const RestitutionCurve& curve = wall ? calibration_->sphere_wall : calibration_->sphere_sphere;
+    law.en = curve.en_at(approach_speed_m_s);
+    law.beta0 = curve.beta0_at(approach_speed_m_s);
+  }
   // A sphere wedged between two bodies collides again at the same instant; keeping those
   // repeats inelastic lets the sequence die out instead of bouncing elastically forever.
   const bool repeat = last_collision_s_[i] == t_s_ || (j >= 0 && last_collision_s_[j] == t_s_);
   last_collision_s_[i] = t_s_;
   if (j >= 0) last_collision_s_[j] = t_s_;
-  return approach_speed_m_s < resting_.elastic_speed_m_s && !repeat ? 1.0 : law.en;
+  if (approach_speed_m_s < resting_.elastic_speed_m_s && !repeat) law.en = 1.0;
+  return law;
 }
 
 void HardEngine::collide_spheres(int i, int j) {
@@ -478,8 +486,9 @@ void HardEngine::collide_spheres(int i, int j) {
       dv + (ri * particles_.angular_velocity_rad_s.col(i) + rj * particles_.angular_velocity_rad_s.col(j)).cross(n);
   const double mi = particles_.mass_kg[i], mj = particles_.mass_kg[j];
   const double approach = dv.dot(n);
-  const CollisionOutcome out = walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj),
-                                                sphere_law_, restitution(approach, sphere_law_, i, j));
+  const HardContactLaw law = law_for(approach, false, i, j);
+  const CollisionOutcome out =
+      walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj), law);
   const Eigen::Vector3d& p = out.impulse_N_s;
   const Eigen::Vector3d torque_arm = n.cross(p);
   particles_.velocity_m_s.col(i) += p / mi;
@@ -532,8 +541,8 @@ void HardEngine::collide_wall(int i, EventKind wall) {
   const double approach = wall == EventKind::side_wall
                               ? x.head<2>().dot(dv.head<2>()) / x.head<2>().norm()
                               : n.z() * (particles_.velocity_m_s(2, i) - host.v_m_s);
-  const CollisionOutcome out =
-      walton_collision(u, n, approach, mobility, wall_law_, restitution(approach, wall_law_, i, -1));
+  const HardContactLaw law = law_for(approach, true, i, -1);
+  const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
   apply_host_impulse(i, n, out, host);
   if (wall == EventKind::side_wall) {
     turn_along_side_wall(i, n);
@@ -581,8 +590,8 @@ void HardEngine::collide_rider(int i, int j) {
     return;
   }
   const Mobility mobility = sphere_mobility(particles_.mass_kg[i]) + Mobility{0, 0, host_inverse_mass_1_kg()};
-  const CollisionOutcome out =
-      walton_collision(u, n, approach, mobility, sphere_law_, restitution(approach, sphere_law_, i, -1));
+  const HardContactLaw law = law_for(approach, false, i, -1);
+  const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
   apply_host_impulse(i, n, out, host);
   rest_if_slow(i, -n, host_.at(t_s_));
 }

@@ -15,32 +15,6 @@ CellGrid::CellGrid(double cavity_radius_m, double cavity_height_m, double min_ce
   n_z_ = std::max(3, static_cast<int>(std::ceil(cavity_height_m / cell_m_)) + 2);
 }
 
-int CellGrid::clamp_xy(double coordinate) const {
-  const double cell = std::floor((coordinate + half_width_m_) / cell_m_);
-  return static_cast<int>(std::clamp(cell, 0.0, static_cast<double>(n_xy_ - 1)));
-}
-
-CellCoord CellGrid::coord_of(const Eigen::Vector3d& p) const {
-  return {clamp_xy(p.x()), clamp_xy(p.y()), static_cast<int>(std::floor(p.z() / cell_m_))};
-}
-
-int CellGrid::index(const CellCoord& c) const {
-  const int iz = ((c.iz % n_z_) + n_z_) % n_z_;
-  return (iz * n_xy_ + c.iy) * n_xy_ + c.ix;
-}
-
-int CellGrid::neighbours(const CellCoord& c, std::array<int, 27>& out) const {
-  int count = 0;
-  for (int dz = -1; dz <= 1; ++dz) {
-    for (int iy = std::max(0, c.iy - 1); iy <= std::min(n_xy_ - 1, c.iy + 1); ++iy) {
-      for (int ix = std::max(0, c.ix - 1); ix <= std::min(n_xy_ - 1, c.ix + 1); ++ix) {
-        out[count++] = index({ix, iy, c.iz + dz});
-      }
-    }
-  }
-  return count;
-}
-
 void CellList::build(const CellGrid& grid, const Eigen::Matrix3Xd& positions) {
   const auto n = static_cast<int>(positions.cols());
   start_.assign(grid.cell_count() + 1, 0);

@@ -1,6 +1,7 @@
 #include "pdamp/model/placement.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -8,6 +9,8 @@
 #include <vector>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/model/cavity.hpp"
+#include "pdamp/model/cell_grid.hpp"
 
 namespace pdamp {
 namespace {
@@ -119,6 +122,48 @@ Particles place_particles(const ParticleSettings& settings, const CavitySettings
     particles.mass_kg[i] = settings.density_kg_m3 * std::numbers::pi / 6.0 * d * d * d;
   }
   return particles;
+}
+
+double separate_overlaps(Particles& particles, const CavitySettings& settings, double host_z_m) {
+  const auto n = static_cast<int>(particles.size());
+  if (n == 0) return 0.0;
+  const Cavity cavity(settings);
+  const Particles original = particles;
+  // Push a hair beyond touching, so that rounding cannot leave a contact behind.
+  const double margin = 1e-9 * particles.max_radius_m();
+  const CellGrid grid(settings.radius_m(), settings.height_m, 2.0 * particles.max_radius_m() + 2.0 * margin);
+  CellList cells;
+  std::array<int, 27> neighbours{};
+  for (int sweep = 0; sweep < 1000; ++sweep) {
+    bool moved = false;
+    cells.build(grid, particles.position_m);
+    for (int i = 0; i < n; ++i) {
+      auto xi = particles.position_m.col(i);
+      const int count = grid.neighbours(grid.coord_of(xi), neighbours);
+      for (int c = 0; c < count; ++c) {
+        for (const int j : cells.particles_in(neighbours[c])) {
+          if (j <= i) continue;
+          auto xj = particles.position_m.col(j);
+          const Eigen::Vector3d d = xi - xj;
+          const double overlap = particles.radius_m[i] + particles.radius_m[j] - d.norm();
+          if (overlap <= 0.0) continue;
+          const Eigen::Vector3d push = 0.5 * (overlap + margin) * d.normalized();
+          xi += push;
+          xj -= push;
+          moved = true;
+        }
+      }
+      for (const Wall wall : {Wall::side, Wall::bottom, Wall::top}) {
+        const WallGap gap = cavity.gap(wall, xi, particles.radius_m[i], host_z_m);
+        if (gap.gap_m < 0.0) {
+          xi += (margin - gap.gap_m) * gap.normal;
+          moved = true;
+        }
+      }
+    }
+    if (!moved) return (particles.position_m - original.position_m).colwise().norm().maxCoeff();
+  }
+  throw RuntimeFailure("the spheres could not be separated: the bed's overlaps are far beyond a resting bed's");
 }
 
 }  // namespace pdamp

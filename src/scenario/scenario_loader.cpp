@@ -235,6 +235,14 @@ const std::vector<KeySpec>& key_specs() {
     for (auto& spec : soft_law_keys("soft", &Scenario::soft_particle, "")) k.push_back(spec);
     for (auto& spec : soft_law_keys("soft_wall", &Scenario::soft_wall, "soft")) k.push_back(spec);
     for (auto& spec : hard_law_keys("hard", &Scenario::hard_particle, "0.71", "")) k.push_back(spec);
+    k.push_back({"hard.restitution", "constant", "",
+                 "constant (en and beta0 as given) | calibrated (e_n(v) and beta0(v) of the soft law, from "
+                 "isolated soft collisions at the impact speed)",
+                 [](Scenario& s, const Value& v) {
+                   if (v.text == "constant") s.hard_restitution = HardRestitution::constant;
+                   else if (v.text == "calibrated") s.hard_restitution = HardRestitution::calibrated;
+                   else reject(v, "must be constant or calibrated");
+                 }, ""});
     // The hard engine's resting-bed parameters (README, "Resting beds and inelastic collapse").
     k.push_back({"hard.rest_speed_m_s", "0.005", "m/s",
                  "a sphere leaving the floor, top cap or a resting sphere slower than this (relative to the host) "

@@ -3,6 +3,8 @@
 #include "pdamp/errors.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/host_only_engine.hpp"
+#include "pdamp/soft/soft_engine.hpp"
+#include "pdamp/soft/time_step.hpp"
 
 namespace pdamp {
 
@@ -15,11 +17,18 @@ Model parse_model(std::string_view text) {
                    "': must be 'soft' (time-stepped Hertz DEM) or 'hard' (event-driven hard spheres)");
 }
 
-std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial) {
+void check_model_can_run(Model model, const Scenario& scenario) {
+  if (scenario.particles.count == 0) return;
+  // The soft engine settles every bed, so its time step must work for either model.
+  (void)model;
+  soft::choose_time_step_s(scenario);
+}
+
+std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial,
+                                    const RestitutionTable* calibration) {
   if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
-  if (model == Model::hard) return std::make_unique<hard::HardEngine>(scenario, initial);
-  throw InputError("the " + std::string(to_string(model)) +
-                   " engine is not built yet: only particles.count = 0 (the host alone) runs for now");
+  if (model == Model::soft) return std::make_unique<soft::SoftEngine>(scenario, initial);
+  return std::make_unique<hard::HardEngine>(scenario, initial, calibration);
 }
 
 }  // namespace pdamp

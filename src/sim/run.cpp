@@ -10,16 +10,6 @@
 
 namespace pdamp {
 
-std::string_view to_string(RunStatus status) {
-  switch (status) {
-    case RunStatus::running: return "running";
-    case RunStatus::completed: return "completed";
-    case RunStatus::failed: return "failed";
-    case RunStatus::interrupted: break;
-  }
-  return "interrupted";
-}
-
 double observation_interval_s(const Scenario& scenario) {
   double fastest = scenario.excitation.angular_frequency_rad_s();
   if (!scenario.host_has_infinite_mass()) {

@@ -54,6 +54,16 @@ RunSummary read_summary(const sqlite::Statement& row) {
 
 }  // namespace
 
+std::string_view to_string(RunStatus status) {
+  switch (status) {
+    case RunStatus::running: return "running";
+    case RunStatus::completed: return "completed";
+    case RunStatus::failed: return "failed";
+    case RunStatus::interrupted: break;
+  }
+  return "interrupted";
+}
+
 RunStore::RunStore(const std::filesystem::path& file) : db_(file) {
   try {
     db_.exec("PRAGMA journal_mode = WAL");
@@ -91,7 +101,8 @@ void RunStore::migrate() {
 std::int64_t RunStore::begin_run(const NewRun& run) {
   sqlite::Statement insert(db_,
                            "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, "
-                           "dt_s, pdamp_version, status, started_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'running', ?)");
+                           "dt_s, pdamp_version, status, started_at, initial_state_id) "
+                           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'running', ?, ?)");
   insert.bind(1, run.model)
       .bind(2, run.scenario_name)
       .bind(3, run.scenario_text)
@@ -101,8 +112,70 @@ std::int64_t RunStore::begin_run(const NewRun& run) {
       .bind(7, run.dt_s)
       .bind(8, std::string_view(version_string))
       .bind(9, utc_now_iso8601());
+  if (run.initial_state_id) insert.bind(10, *run.initial_state_id);
   insert.run();
   return db_.last_insert_rowid();
+}
+
+std::optional<StoredInitialState> RunStore::find_initial_state(const std::string& settle_key) {
+  sqlite::Statement query(db_, "SELECT state_id, settle_time_s FROM initial_states WHERE settle_key = ?");
+  query.bind(1, settle_key);
+  if (!query.step()) return std::nullopt;
+  const std::int64_t id = query.column_int(0);
+  return StoredInitialState{id, load_initial_particles(id), query.column_double(1)};
+}
+
+std::int64_t RunStore::save_initial_state(const std::string& settle_key, const Particles& p, double settle_time_s,
+                                          double kinetic_J, double wall_time_s) {
+  sqlite::Transaction transaction(db_);
+  // Another process may have settled the same bed meanwhile: the first one stays.
+  sqlite::Statement existing(db_, "SELECT state_id FROM initial_states WHERE settle_key = ?");
+  existing.bind(1, settle_key);
+  if (existing.step()) return existing.column_int(0);
+  sqlite::Statement state(db_,
+                          "INSERT INTO initial_states (settle_key, n_particles, settle_time_s, kinetic_J, wall_time_s, "
+                          "created_at) VALUES (?, ?, ?, ?, ?, ?)");
+  state.bind(1, settle_key)
+      .bind(2, static_cast<std::int64_t>(p.size()))
+      .bind(3, settle_time_s)
+      .bind(4, kinetic_J)
+      .bind(5, wall_time_s)
+      .bind(6, utc_now_iso8601());
+  state.run();
+  const std::int64_t id = db_.last_insert_rowid();
+  sqlite::Statement particle(db_,
+                             "INSERT INTO initial_particles VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    particle.bind(1, id).bind(2, static_cast<std::int64_t>(i));
+    for (int c = 0; c < 3; ++c) {
+      particle.bind(3 + c, p.position_m(c, i)).bind(6 + c, p.velocity_m_s(c, i)).bind(9 + c, p.angular_velocity_rad_s(c, i));
+    }
+    particle.bind(12, p.radius_m[i]).bind(13, p.mass_kg[i]);
+    particle.run();
+  }
+  transaction.commit();
+  return id;
+}
+
+Particles RunStore::load_initial_particles(std::int64_t state_id) {
+  sqlite::Statement count(db_, "SELECT n_particles FROM initial_states WHERE state_id = ?");
+  count.bind(1, state_id);
+  if (!count.step()) throw InputError("initial state " + std::to_string(state_id) + " is not in the store");
+  Particles p(count.column_int(0));
+  sqlite::Statement rows(db_, "SELECT * FROM initial_particles WHERE state_id = ? ORDER BY particle");
+  rows.bind(1, state_id);
+  Eigen::Index i = 0;
+  for (; rows.step() && i < p.size(); ++i) {
+    for (int c = 0; c < 3; ++c) {
+      p.position_m(c, i) = rows.column_double(2 + c);
+      p.velocity_m_s(c, i) = rows.column_double(5 + c);
+      p.angular_velocity_rad_s(c, i) = rows.column_double(8 + c);
+    }
+    p.radius_m[i] = rows.column_double(11);
+    p.mass_kg[i] = rows.column_double(12);
+  }
+  if (i != p.size()) throw RuntimeFailure("initial state " + std::to_string(state_id) + " is incomplete in the store");
+  return p;
 }
 
 void RunStore::finish_run(std::int64_t run_id, const RunEnd& end) {
@@ -127,12 +200,77 @@ void RunStore::save_statistics(std::int64_t run_id, const EngineStatistics& stat
   transaction.commit();
 }
 
+void RunStore::save_calibration(std::int64_t run_id, const RestitutionTable& table) {
+  sqlite::Transaction transaction(db_);
+  sqlite::Statement insert(db_,
+                           "INSERT INTO calibrations (run_id, contact, impact_speed_m_s, en, beta0) VALUES (?, ?, ?, ?, ?)");
+  for (const auto& [contact, curve] : {std::pair{"sphere_sphere", &table.sphere_sphere}, std::pair{"sphere_wall", &table.sphere_wall}}) {
+    for (std::size_t k = 0; k < curve->impact_speed_m_s.size(); ++k) {
+      insert.bind(1, run_id)
+          .bind(2, std::string_view(contact))
+          .bind(3, curve->impact_speed_m_s[k])
+          .bind(4, curve->en[k])
+          .bind(5, curve->beta0[k])
+          .run();
+    }
+  }
+  transaction.commit();
+}
+
 EngineStatistics RunStore::statistics(std::int64_t run_id) {
   sqlite::Statement query(db_, "SELECT name, value FROM run_statistics WHERE run_id = ? ORDER BY name");
   query.bind(1, run_id);
   EngineStatistics result;
   while (query.step()) result.emplace_back(query.column_text(0), query.column_int(1));
   return result;
+}
+
+std::int64_t RunStore::save_comparison(const ComparisonRecord& c) {
+  sqlite::Transaction transaction(db_);
+  sqlite::Statement row(db_,
+                        "INSERT INTO comparisons (scenario_name, soft_run_id, hard_run_id, initial_state_id, "
+                        "hard_restitution, created_at, envelope_max_rel_diff, envelope_rms_rel_diff, "
+                        "small_amplitude_freq_soft_hz, small_amplitude_freq_hard_hz, gamma_below_1_soft_s, "
+                        "gamma_below_1_hard_s, psi_mean_abs_diff, dissipated_soft_J, dissipated_hard_J, "
+                        "dissipated_rel_diff, wall_time_soft_s, wall_time_hard_s, wall_time_ratio, soft_steps, "
+                        "hard_events) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  row.bind(1, c.scenario_name).bind(2, c.soft_run_id).bind(3, c.hard_run_id);
+  if (c.initial_state_id) row.bind(4, *c.initial_state_id);
+  row.bind(5, c.hard_restitution)
+      .bind(6, utc_now_iso8601())
+      .bind(7, c.envelope_max_rel_diff)
+      .bind(8, c.envelope_rms_rel_diff)
+      .bind(9, c.small_amplitude_freq_soft_hz)
+      .bind(10, c.small_amplitude_freq_hard_hz)
+      .bind(11, c.gamma_below_1_soft_s)
+      .bind(12, c.gamma_below_1_hard_s)
+      .bind(13, c.psi_mean_abs_diff)
+      .bind(14, c.dissipated_soft_J)
+      .bind(15, c.dissipated_hard_J)
+      .bind(16, c.dissipated_rel_diff)
+      .bind(17, c.wall_time_soft_s)
+      .bind(18, c.wall_time_hard_s)
+      .bind(19, c.wall_time_ratio)
+      .bind(20, c.soft_steps)
+      .bind(21, c.hard_events);
+  row.run();
+  const std::int64_t id = db_.last_insert_rowid();
+  sqlite::Statement bin(db_,
+                        "INSERT INTO comparison_psi_bins (comparison_id, gamma_low, gamma_high, psi_soft, psi_hard, "
+                        "cycles_soft, cycles_hard) VALUES (?, ?, ?, ?, ?, ?, ?)");
+  for (const auto& b : c.psi_bins) {
+    bin.bind(1, id).bind(2, b.gamma_low).bind(3, b.gamma_high).bind(4, b.psi_soft).bind(5, b.psi_hard);
+    bin.bind(6, b.cycles_soft).bind(7, b.cycles_hard).run();
+  }
+  sqlite::Statement energy(db_,
+                           "INSERT INTO comparison_energy (comparison_id, t_s, model, impact_J, friction_J, viscous_J) "
+                           "VALUES (?, ?, ?, ?, ?, ?)");
+  for (const auto& e : c.energy) {
+    energy.bind(1, id).bind(2, e.t_s).bind(3, e.model).bind(4, e.impact_J).bind(5, e.friction_J).bind(6, e.viscous_J);
+    energy.run();
+  }
+  transaction.commit();
+  return id;
 }
 
 std::vector<RunSummary> RunStore::list_runs() {

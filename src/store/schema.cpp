@@ -87,7 +87,121 @@ CREATE TABLE run_statistics (
 ) STRICT, WITHOUT ROWID;
 )sql";
 
-constexpr std::array<std::string_view, 2> all{v1_runs_samples_cycles, v2_run_statistics};
+constexpr std::string_view v3_initial_states = R"sql(
+CREATE TABLE initial_states (
+  state_id       INTEGER PRIMARY KEY,
+  settle_key     TEXT NOT NULL UNIQUE,  -- every setting that determines the bed
+  n_particles    INTEGER NOT NULL,
+  settle_time_s  REAL NOT NULL,         -- simulated settling time
+  kinetic_J      REAL NOT NULL,         -- particle kinetic energy when declared at rest
+  wall_time_s    REAL NOT NULL,
+  created_at     TEXT NOT NULL
+) STRICT;
+
+CREATE TABLE initial_particles (
+  state_id   INTEGER NOT NULL REFERENCES initial_states (state_id) ON DELETE CASCADE,
+  particle   INTEGER NOT NULL,
+  x_m        REAL NOT NULL,
+  y_m        REAL NOT NULL,
+  z_m        REAL NOT NULL,
+  vx_m_s     REAL NOT NULL,
+  vy_m_s     REAL NOT NULL,
+  vz_m_s     REAL NOT NULL,
+  wx_rad_s   REAL NOT NULL,
+  wy_rad_s   REAL NOT NULL,
+  wz_rad_s   REAL NOT NULL,
+  radius_m   REAL NOT NULL,
+  mass_kg    REAL NOT NULL,
+  PRIMARY KEY (state_id, particle)
+) STRICT, WITHOUT ROWID;
+
+ALTER TABLE runs ADD COLUMN initial_state_id INTEGER REFERENCES initial_states (state_id);
+)sql";
+
+constexpr std::string_view v4_comparisons = R"sql(
+CREATE TABLE calibrations (
+  run_id            INTEGER NOT NULL REFERENCES runs (run_id) ON DELETE CASCADE,
+  contact           TEXT NOT NULL CHECK (contact IN ('sphere_sphere', 'sphere_wall')),
+  impact_speed_m_s  REAL NOT NULL,
+  en                REAL NOT NULL,  -- normal restitution of an isolated soft collision
+  beta0             REAL NOT NULL,  -- tangential restitution of a sticking oblique one
+  PRIMARY KEY (run_id, contact, impact_speed_m_s)
+) STRICT, WITHOUT ROWID;
+
+CREATE TABLE comparisons (
+  comparison_id                 INTEGER PRIMARY KEY,
+  scenario_name                 TEXT NOT NULL,
+  soft_run_id                   INTEGER NOT NULL REFERENCES runs (run_id) ON DELETE CASCADE,
+  hard_run_id                   INTEGER NOT NULL REFERENCES runs (run_id) ON DELETE CASCADE,
+  initial_state_id              INTEGER REFERENCES initial_states (state_id),
+  hard_restitution              TEXT NOT NULL,
+  created_at                    TEXT NOT NULL,
+  envelope_max_rel_diff         REAL,  -- max over t of |A_hard(t) - A_soft(t)| / A_soft(0)
+  envelope_rms_rel_diff         REAL,  -- rms of the same over the soft run's cycles
+  small_amplitude_freq_soft_hz  REAL,  -- mean cycle frequency once Gamma < 1
+  small_amplitude_freq_hard_hz  REAL,
+  gamma_below_1_soft_s          REAL,  -- start of the first cycle with Gamma < 1
+  gamma_below_1_hard_s          REAL,
+  psi_mean_abs_diff             REAL,  -- mean |psi_hard - psi_soft| over Gamma bins both models fill
+  dissipated_soft_J             REAL,  -- impact + friction + viscous at the end
+  dissipated_hard_J             REAL,
+  dissipated_rel_diff           REAL,  -- (hard - soft) / soft
+  wall_time_soft_s              REAL,
+  wall_time_hard_s              REAL,
+  wall_time_ratio               REAL,  -- soft / hard
+  soft_steps                    INTEGER,
+  hard_events                   INTEGER
+) STRICT;
+
+CREATE TABLE comparison_psi_bins (
+  comparison_id  INTEGER NOT NULL REFERENCES comparisons (comparison_id) ON DELETE CASCADE,
+  gamma_low      REAL NOT NULL,  -- bins [2^k, 2^(k+1))
+  gamma_high     REAL NOT NULL,
+  psi_soft       REAL,           -- mean psi of the cycles in the bin; NULL if none
+  psi_hard       REAL,
+  cycles_soft    INTEGER NOT NULL,
+  cycles_hard    INTEGER NOT NULL,
+  PRIMARY KEY (comparison_id, gamma_low)
+) STRICT, WITHOUT ROWID;
+
+CREATE TABLE comparison_energy (
+  comparison_id  INTEGER NOT NULL REFERENCES comparisons (comparison_id) ON DELETE CASCADE,
+  t_s            REAL NOT NULL,
+  model          TEXT NOT NULL CHECK (model IN ('soft', 'hard')),
+  impact_J       REAL NOT NULL,
+  friction_J     REAL NOT NULL,
+  viscous_J      REAL NOT NULL,
+  PRIMARY KEY (comparison_id, t_s, model)
+) STRICT, WITHOUT ROWID;
+
+CREATE VIEW damping_curve AS
+SELECT c.run_id, r.model, r.scenario_name, c.cycle, c.t_start_s, c.amplitude_m, c.freq_hz, c.gamma,
+       c.psi, c.psi_impact, c.psi_friction, c.psi_viscous
+FROM cycles c JOIN runs r USING (run_id);
+
+CREATE VIEW energy_partition AS
+SELECT r.run_id, r.model, r.scenario_name, r.n_particles, s.t_s,
+       s.dissipated_impact_J AS impact_J, s.dissipated_friction_J AS friction_J, s.dissipated_viscous_J AS viscous_J,
+       s.dissipated_impact_J + s.dissipated_friction_J + s.dissipated_viscous_J AS total_J,
+       s.dissipated_impact_J / nullif(s.dissipated_impact_J + s.dissipated_friction_J + s.dissipated_viscous_J, 0) AS impact_share,
+       s.dissipated_friction_J / nullif(s.dissipated_impact_J + s.dissipated_friction_J + s.dissipated_viscous_J, 0) AS friction_share,
+       s.dissipated_viscous_J / nullif(s.dissipated_impact_J + s.dissipated_friction_J + s.dissipated_viscous_J, 0) AS viscous_share
+FROM runs r JOIN samples s ON s.run_id = r.run_id
+ AND s.t_s = (SELECT max(t_s) FROM samples m WHERE m.run_id = r.run_id);
+
+CREATE VIEW comparison_summary AS
+SELECT c.comparison_id, c.scenario_name, c.hard_restitution, c.soft_run_id, c.hard_run_id,
+       c.envelope_max_rel_diff, c.small_amplitude_freq_soft_hz, c.small_amplitude_freq_hard_hz,
+       c.gamma_below_1_soft_s, c.gamma_below_1_hard_s, c.psi_mean_abs_diff,
+       c.dissipated_soft_J, c.dissipated_hard_J, c.dissipated_rel_diff,
+       c.wall_time_soft_s, c.wall_time_hard_s, c.wall_time_ratio, c.soft_steps, c.hard_events,
+       (SELECT max(psi) FROM cycles WHERE run_id = c.soft_run_id) AS psi_peak_soft,
+       (SELECT max(psi) FROM cycles WHERE run_id = c.hard_run_id) AS psi_peak_hard
+FROM comparisons c;
+)sql";
+
+constexpr std::array<std::string_view, 4> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
+                                              v4_comparisons};
 
 }  // namespace
 

@@ -42,8 +42,7 @@ struct CollisionOutcome {
 /// the partner, `approach_speed` its normal component (> 0 when the bodies approach,
 /// otherwise the outcome is zero). The caller computes it from the centres' velocities
 /// exactly as the event prediction did, so that round-off in the rotation's normal part
-/// can never turn a predicted contact into a non-event. `restitution` is the e_n to use
-/// (the law's, or 1 for an elastic collision).
+/// can never turn a predicted contact into a non-event.
 ///
 /// Sticking: the impulse that reverses the normal relative velocity times e_n and the
 /// tangential one times β0. If its tangential part exceeds μ times its normal part the
@@ -52,8 +51,7 @@ struct CollisionOutcome {
 /// any e_n, μ ≥ 0 and β0 ∈ [−1, 1]; the loss is split exactly into the work of the normal
 /// and of the tangential impulse at the mean of the pre- and post-collision velocities.
 CollisionOutcome walton_collision(const Eigen::Vector3d& relative_velocity, const Eigen::Vector3d& normal,
-                                  double approach_speed, const Mobility& mobility, const HardContactLaw& law,
-                                  double restitution);
+                                  double approach_speed, const Mobility& mobility, const HardContactLaw& law);
 
 /// K·p for the mobility above.
 Eigen::Vector3d apply_mobility(const Mobility& mobility, const Eigen::Vector3d& normal, const Eigen::Vector3d& p);

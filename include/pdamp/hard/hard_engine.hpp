@@ -27,6 +27,7 @@
 /// pressing (the whole bed is released) or a sphere hits it faster than that speed.
 
 #include <array>
+#include <optional>
 #include <cstdint>
 #include <vector>
 
@@ -38,13 +39,16 @@
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/cell_grid.hpp"
 #include "pdamp/model/engine.hpp"
+#include "pdamp/model/restitution.hpp"
 
 namespace pdamp::hard {
 
 class HardEngine final : public Engine {
  public:
-  /// Throws InputError if the initial spheres overlap each other or the walls.
-  HardEngine(const Scenario& scenario, const Particles& initial);
+  /// Throws InputError if the initial spheres overlap each other or the walls. With a
+  /// `calibration`, e_n and β0 follow the soft law's e_n(v), β0(v) at each impact speed
+  /// (hard.restitution = calibrated); otherwise they are the scenario's constants.
+  HardEngine(const Scenario& scenario, const Particles& initial, const RestitutionTable* calibration = nullptr);
 
   void advance_to(double t_s) override;
   Observation observe() const override;
@@ -70,8 +74,10 @@ class HardEngine final : public Engine {
   Eigen::Vector3d position_now(int i, const HostState& host) const;
   void bring_to_now(int i);
   double host_inverse_mass_1_kg() const;
-  /// e_n for a collision of i with j (−1 for a wall or rider), which also records its time.
-  double restitution(double approach_speed_m_s, const HardContactLaw& law, int i, int j);
+  /// The law of a collision of i with j (−1 for a wall or rider) at this approach speed:
+  /// calibrated e_n and β0 if any, and e_n = 1 for slow first collisions (see
+  /// HardRestingSettings). Records the collision's time.
+  HardContactLaw law_for(double approach_speed_m_s, bool wall, int i, int j);
 
   // Prediction.
   void push(const Event& event) { queue_.push(event); }
@@ -116,6 +122,7 @@ class HardEngine final : public Engine {
   Eigen::Vector3d gravity_m_s2_;
   HardContactLaw sphere_law_, wall_law_;
   HardRestingSettings resting_;
+  std::optional<RestitutionTable> calibration_;
   Cavity cavity_;
   HostModel host_model_;
   double fastest_host_rate_1_s_;

@@ -27,7 +27,7 @@ class Cavity {
   double height_m() const { return height_m_; }
 
   WallGap side(const Eigen::Vector3d& centre, double radius_m) const {
-    const double rho = std::hypot(centre.x(), centre.y());
+    const double rho = std::sqrt(centre.x() * centre.x() + centre.y() * centre.y());
     // On the axis every direction is as good; a sphere there cannot touch the side anyway.
     const Eigen::Vector3d inward = rho > 0 ? Eigen::Vector3d(-centre.x() / rho, -centre.y() / rho, 0.0)
                                            : Eigen::Vector3d(-1.0, 0.0, 0.0);

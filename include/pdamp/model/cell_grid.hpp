@@ -9,7 +9,9 @@
 /// whose centres lie in its own cell or the 26 around it.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <span>
 #include <vector>
 
@@ -52,6 +54,33 @@ class CellGrid {
   int n_xy_;
   int n_z_;
 };
+
+// Inline: these run for every sphere at every neighbour-list build.
+inline int CellGrid::clamp_xy(double coordinate) const {
+  const double cell = std::floor((coordinate + half_width_m_) / cell_m_);
+  return static_cast<int>(std::clamp(cell, 0.0, static_cast<double>(n_xy_ - 1)));
+}
+
+inline CellCoord CellGrid::coord_of(const Eigen::Vector3d& p) const {
+  return {clamp_xy(p.x()), clamp_xy(p.y()), static_cast<int>(std::floor(p.z() / cell_m_))};
+}
+
+inline int CellGrid::index(const CellCoord& c) const {
+  const int iz = ((c.iz % n_z_) + n_z_) % n_z_;
+  return (iz * n_xy_ + c.iy) * n_xy_ + c.ix;
+}
+
+inline int CellGrid::neighbours(const CellCoord& c, std::array<int, 27>& out) const {
+  int count = 0;
+  for (int dz = -1; dz <= 1; ++dz) {
+    for (int iy = std::max(0, c.iy - 1); iy <= std::min(n_xy_ - 1, c.iy + 1); ++iy) {
+      for (int ix = std::max(0, c.ix - 1); ix <= std::min(n_xy_ - 1, c.ix + 1); ++ix) {
+        out[count++] = index({ix, iy, c.iz + dz});
+      }
+    }
+  }
+  return count;
+}
 
 /// Particles binned by cell with a counting sort: the particles of cell c are
 /// `particles_in(c)`. Rebuilding reuses the arrays, so it does not allocate once warm.

@@ -29,6 +29,9 @@ class Engine {
   /// The time step the engine uses (s), or 0 for an event-driven engine.
   virtual double time_step_s() const = 0;
   virtual EngineStatistics statistics() const { return {}; }
+  /// Things the user should know about the run (e.g. contacts overlapping more than the
+  /// model is good for); printed on stderr and kept in the run's message.
+  virtual std::vector<std::string> warnings() const { return {}; }
 };
 
 }  // namespace pdamp

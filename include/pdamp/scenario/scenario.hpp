@@ -86,6 +86,12 @@ struct HardRestingSettings {
   double elastic_speed_m_s = 1e-4;
 };
 
+/// Where the hard-sphere engine takes e_n and β0 from.
+enum class HardRestitution {
+  constant,    ///< the [hard] and [hard_wall] values
+  calibrated,  ///< e_n(v), β0(v) of the soft law, from isolated soft collisions (sim/calibration.hpp)
+};
+
 struct RunSettings {
   double duration_s = 1.5;
   double sample_interval_s = 1e-3;
@@ -104,6 +110,7 @@ struct Scenario {
   HardContactLaw hard_particle;
   HardContactLaw hard_wall;
   HardRestingSettings hard_resting;
+  HardRestitution hard_restitution = HardRestitution::constant;
   RunSettings run;
 
   /// Every key with its resolved value, in scenario-file syntax. Loading this text

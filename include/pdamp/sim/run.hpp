@@ -8,12 +8,10 @@
 #include <string_view>
 
 #include "pdamp/model/engine.hpp"
-#include "pdamp/sim/recorder.hpp"
+#include "pdamp/analysis/recorder.hpp"
+#include "pdamp/store/run_store.hpp"
 
 namespace pdamp {
-
-enum class RunStatus { running, completed, failed, interrupted };
-std::string_view to_string(RunStatus status);
 
 struct RunControl {
   const std::atomic<bool>* stop = nullptr;  ///< when it becomes true the run ends as interrupted

@@ -1,0 +1,55 @@
+#pragma once
+/// Verlet neighbour list with a skin, built on the shared cell grid. Every pair closer
+/// than r_i + r_j + skin is listed (half list: i < j), so no contact
+/// can be missed until some sphere has moved more than skin/2 relative to the host since
+/// the build — the engine rebuilds before that. Each listed pair carries its contact
+/// history, which a rebuild hands over to the new list.
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "pdamp/model/cell_grid.hpp"
+#include "pdamp/soft/contact_law.hpp"
+
+namespace pdamp::soft {
+
+class NeighbourList {
+ public:
+  NeighbourList(const CellGrid& grid, double skin_m) : grid_(grid), skin_m_(skin_m) {}
+
+  /// Lists the pairs within reach of `positions`, keeping the histories of pairs that
+  /// stay listed.
+  void rebuild(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& radii);
+
+  double skin_m() const { return skin_m_; }
+  int size() const { return static_cast<int>(partner_.size()); }
+  /// Pairs of particle i are [first(i), first(i + 1)).
+  int first(int i) const { return first_[i]; }
+  int partner(int k) const { return partner_[k]; }
+  /// The pairs in which particle j is the partner: pair(r) for r in
+  /// [partner_first(j), partner_first(j + 1)), in ascending pair order.
+  int partner_first(int j) const { return reverse_first_[j]; }
+  int reverse_pair(int r) const { return reverse_pair_[r]; }
+  ContactHistory& history(int k) { return history_[k]; }
+  /// Whether pair k was touching after the last force computation.
+  bool touching(int k) const { return touching_[k] != 0; }
+  void set_touching(int k, bool touching) { touching_[k] = touching; }
+  long long rebuilds() const { return rebuilds_; }
+
+ private:
+  CellGrid grid_;
+  double skin_m_;
+  CellList cells_;
+  Eigen::Matrix3Xd cell_positions_;
+  std::vector<int> first_, partner_;
+  std::vector<ContactHistory> history_;
+  std::vector<unsigned char> touching_;
+  std::vector<int> next_first_, next_partner_;
+  std::vector<ContactHistory> next_history_;
+  std::vector<unsigned char> next_touching_;
+  std::vector<int> old_slot_;  ///< during a rebuild: where partner j of the current i was listed, or −1
+  std::vector<int> reverse_first_, reverse_pair_;
+  long long rebuilds_ = 0;
+};
+
+}  // namespace pdamp::soft

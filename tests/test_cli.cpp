@@ -119,6 +119,27 @@ TEST_CASE("host alone, both models: the stored free decay is the exact Table 1 s
   }
 }
 
+TEST_CASE("pdamp run --model hard on small.ini: completed, balanced to 1e-9, event statistics stored") {
+  test::TempDir dir("cli-hard");
+  const auto db = dir / "runs.sqlite";
+  const Result r = pdamp_cli(
+      {"run", "--scenario", test::scenario_file("small").string(), "--model", "hard", "--db", db.string()}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("completed") != std::string::npos);
+  sqlite::Database d(db);
+  sqlite::Statement run(d, "SELECT energy_balance_rel_err, sim_time_s, n_cycles FROM run_summary WHERE run_id = 1");
+  REQUIRE(run.step());
+  CHECK(run.column_double(0) <= 1e-9);
+  CHECK(run.column_double(1) == 0.3);
+  CHECK(run.column_int(2) >= 4);
+  for (const char* name : {"events_sphere_sphere", "events_wall", "events_cap", "events_cell_crossing", "events_stale"}) {
+    CAPTURE(name);
+    CHECK(count_rows(db, "SELECT value FROM run_statistics WHERE run_id = 1 AND name = '" + std::string(name) + "'") > 0);
+  }
+  CHECK(count_rows(db, "SELECT count(*) FROM samples WHERE run_id = 1") == 601);
+}
+
 TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
   test::TempDir dir("cli-bad");
   const auto db = dir / "runs.sqlite";

@@ -291,11 +291,18 @@ TEST_CASE("the same scenario and seed give bit-identical results") {
   CHECK(a.statistics() == b.statistics());
 }
 
-TEST_CASE("overlapping initial spheres are refused") {
+TEST_CASE("overlapping initial spheres (a soft-settled bed) are pushed just apart, and a large push is reported") {
   const Scenario s = fixed_walls("[particles]\ncount = 2\ndiameter_m = 0.001\n");
   Particles p(2);
   for (int i = 0; i < 2; ++i) p.radius_m[i] = 0.0005, p.mass_kg[i] = 1e-6;
   p.position_m.col(0) = Eigen::Vector3d(0, 0, 0.002);
-  p.position_m.col(1) = Eigen::Vector3d(0.0009, 0, 0.002);
-  CHECK_THROWS_AS(HardEngine(s, p), InputError);
+  p.position_m.col(1) = Eigen::Vector3d(0.00099999, 0, 0.002);  // 10 nm overlap: a resting soft contact
+  const HardEngine slight(s, p);
+  CHECK(slight.max_overlap_m() == 0.0);
+  CHECK(slight.warnings().empty());
+  p.position_m.col(1) = Eigen::Vector3d(0.0009, 0, 0.002);  // 100 um
+  const HardEngine pushed(s, p);
+  CHECK(pushed.max_overlap_m() == 0.0);
+  REQUIRE(pushed.warnings().size() == 1);
+  CHECK(pushed.warnings()[0].find("overlapped") != std::string::npos);
 }

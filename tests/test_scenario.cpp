@@ -39,6 +39,9 @@ TEST_CASE("an empty scenario is the paper's Table 1 case") {
   CHECK(s.gravity_m_s2.z() == -9.81);
   CHECK(s.excitation.mode == ExcitationMode::free_decay);
   CHECK_FALSE(s.run.dt_s.has_value());
+  CHECK(s.hard_resting.rest_speed_m_s == 0.005);
+  CHECK(s.hard_resting.elastic_speed_m_s == 1e-4);
+  CHECK(scenario_from("[hard]\nrest_speed_m_s = 0.002\n").hard_resting.rest_speed_m_s == 0.002);
 }
 
 TEST_CASE("sections, comments, overrides and inherited wall laws") {
@@ -79,6 +82,8 @@ TEST_CASE("bad values are rejected with the key, the value and what is valid") {
       {"[soft]\nmu = -0.1\n", "soft.mu", "'-0.1'", ">= 0"},
       {"[hard]\nen = 1.2\n", "hard.en", "'1.2'", "[0, 1]"},
       {"[hard_wall]\nbeta0 = -2\n", "hard_wall.beta0", "'-2'", "[-1, 1]"},
+      {"[hard]\nrest_speed_m_s = -0.01\n", "hard.rest_speed_m_s", "'-0.01'", ">= 0"},
+      {"[hard]\nelastic_speed_m_s = fast\n", "hard.elastic_speed_m_s", "'fast'", "not a finite number"},
       {"[particles]\ncount = 2.5\n", "particles.count", "'2.5'", "whole number"},
       {"[particles]\nseed = -3\n", "particles.seed", "'-3'", "whole number"},
       {"[run]\ndt_s = fast\n", "run.dt_s", "'fast'", "'auto'"},

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/model/placement.hpp"
 
 namespace pdamp::hard {
 
@@ -56,6 +57,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
   // A collision cascade through a touching bed can take a few events per contact at one
   // instant; far more than that means no progress.
   stall_limit_ = 1000 * static_cast<std::int64_t>(initial.size()) + 100000;
+  // A bed settled with soft contacts overlaps by a tiny fraction of a radius: the hard
+  // engine starts from it with the spheres pushed just apart.
+  separation_m_ = separate_overlaps(particles_, scenario.cavity, host_.at(0.0).z_m);
   const int n = static_cast<int>(particles_.size());
   for (int i = 0; i < n; ++i) {
     cell_[i] = grid_.coord_of(particles_.position_m.col(i));
@@ -160,6 +164,15 @@ Observation HardEngine::observe() const {
 
 std::int64_t HardEngine::collisions() const {
   return stats_.sphere_sphere + stats_.side_wall + stats_.cap + stats_.rider;
+}
+
+std::vector<std::string> HardEngine::warnings() const {
+  // A few percent of a radius is where soft overlaps stop being a resting bed's (the
+  // soft engine warns there too); a push that large changes the start noticeably.
+  if (separation_m_ <= 0.05 * max_radius_m_) return {};
+  std::ostringstream text;
+  text << "the initial spheres overlapped: separating them moved a sphere by up to " << separation_m_ << " m";
+  return {text.str()};
 }
 
 EngineStatistics HardEngine::statistics() const {

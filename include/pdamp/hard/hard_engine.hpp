@@ -45,7 +45,8 @@ namespace pdamp::hard {
 
 class HardEngine final : public Engine {
  public:
-  /// Throws InputError if the initial spheres overlap each other or the walls. With a
+  /// Overlapping initial spheres (a bed settled with soft contacts) are pushed just apart
+  /// first (separate_overlaps); a separation above 5 % of a radius is reported in warnings(). With a
   /// `calibration`, e_n and β0 follow the soft law's e_n(v), β0(v) at each impact speed
   /// (hard.restitution = calibrated); otherwise they are the scenario's constants.
   HardEngine(const Scenario& scenario, const Particles& initial, const RestitutionTable* calibration = nullptr);
@@ -55,6 +56,7 @@ class HardEngine final : public Engine {
   State state() const override;
   double time_step_s() const override { return 0.0; }
   EngineStatistics statistics() const override;
+  std::vector<std::string> warnings() const override;
 
   /// The deepest overlap now between two spheres or a sphere and a wall (m, 0 if none).
   double max_overlap_m() const;
@@ -146,6 +148,7 @@ class HardEngine final : public Engine {
   EventQueue queue_;
   double contact_tolerance_m_;
   double max_radius_m_;
+  double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart
   std::int64_t events_at_this_instant_ = 0;
   std::int64_t stall_limit_;
 

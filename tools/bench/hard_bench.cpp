@@ -1,0 +1,135 @@
+/// pdamp_bench: throughput of the hard-sphere engine on the benchmark gas.
+///
+///   pdamp_bench [--particles N] [--collisions C] [--host fixed|free] [--packing PHI]
+///
+/// N elastic, frictionless spheres of 1 mm (e_n = 1, μ = 0) at random velocities
+/// (Gaussian components, 1 m/s rms speed), no gravity, in a closed cylinder (D = H) sized
+/// for the solid fraction PHI (default 0.3). The host is fixed (prescribed, zero
+/// amplitude) or free (mass 10x the spheres', 20 Hz, undamped), which makes every cap
+/// collision an impulse on the host and shows what those cost as N grows. After a
+/// warm-up of N collisions it times C collisions (default 20 N, at least 10^6) and prints
+/// one line: collisions/s, events/s, the host-impulse counters, memory per sphere, the
+/// relative change of the stored energy (for the fixed host: the conservation error) and
+/// the ledger's balance error (for the free host, spheres that come to rest on an
+/// accelerating cap lose energy, which the ledger books).
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <numbers>
+#include <random>
+#include <string>
+
+#include "pdamp/errors.hpp"
+#include "pdamp/hard/hard_engine.hpp"
+#include "pdamp/model/placement.hpp"
+#include "pdamp/scenario/scenario_loader.hpp"
+
+using namespace pdamp;
+
+namespace {
+
+long peak_rss_kB() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+std::int64_t statistic(const Engine& engine, const std::string& name) {
+  for (const auto& [key, value] : engine.statistics()) {
+    if (key == name) return value;
+  }
+  return 0;
+}
+
+double total_energy(const Engine& engine) { return engine.observe().energy.stored_J(); }
+
+[[noreturn]] void usage() {
+  std::fputs("usage: pdamp_bench [--particles N] [--collisions C] [--host fixed|free] [--packing PHI]\n", stderr);
+  std::exit(2);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int n = 1000;
+  long collisions = 0;
+  bool free_host = false;
+  double packing = 0.3;
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    if (a + 1 >= argc) usage();
+    const std::string value = argv[++a];
+    if (arg == "--particles") n = std::stoi(value);
+    else if (arg == "--collisions") collisions = std::stol(value);
+    else if (arg == "--host") free_host = value == "free";
+    else if (arg == "--packing") packing = std::stod(value);
+    else usage();
+  }
+  if (collisions == 0) collisions = std::max(20L * n, 1000000L);
+
+  const double d = 0.001;
+  const double volume = n * std::numbers::pi / 6 * d * d * d / packing;
+  const double diameter = std::cbrt(4 * volume / std::numbers::pi);
+  const double host_mass = 10.0 * n * 8000 * std::numbers::pi / 6 * d * d * d;
+  const double host_stiffness = host_mass * std::pow(2 * std::numbers::pi * 20.0, 2);
+  std::string text = "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = " + std::to_string(diameter) +
+                     "\nheight_m = " + std::to_string(diameter) + "\n[particles]\ncount = " + std::to_string(n) +
+                     "\ndiameter_m = 0.001\ndensity_kg_m3 = 8000\n[hard]\nen = 1\nmu = 0\n[hard_wall]\nen = 1\nmu = 0\n";
+  text += free_host ? "[host]\nz0_m = 0\ndamping_N_s_m = 0\nmass_kg = " + std::to_string(host_mass) +
+                          "\nstiffness_N_m = " + std::to_string(host_stiffness) + "\n"
+                    : "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 1\n";
+  try {
+    Scenario scenario = parse_scenario(text, "bench", "pdamp_bench");
+    if (!free_host) scenario.excitation.amplitude_m = 0.0;  // fixed walls
+    Particles spheres = place_particles(scenario.particles, scenario.cavity, 0.0);
+    std::mt19937_64 rng(1);
+    std::normal_distribution<double> component(0.0, 1.0 / std::sqrt(3.0));
+    for (int i = 0; i < n; ++i) {
+      spheres.velocity_m_s.col(i) = Eigen::Vector3d(component(rng), component(rng), component(rng));
+    }
+    const long rss_before = peak_rss_kB();
+    hard::HardEngine engine(scenario, spheres);
+    const double e0 = total_energy(engine);
+    // Chunks of simulated time that hold about N/4 collisions each.
+    const double mean_free_time = d / (6 * std::sqrt(2.0) * packing * 1.0);
+    const double chunk = 0.5 * mean_free_time;
+    double t = 0.0;
+    while (engine.collisions() < n) engine.advance_to(t += chunk);
+    const std::int64_t start_collisions = engine.collisions();
+    const EngineStatistics start_stats = engine.statistics();
+    std::int64_t start_events = 0;
+    for (const auto& [name, value] : start_stats) {
+      if (name.rfind("events_", 0) == 0) start_events += value;
+    }
+    const auto wall_start = std::chrono::steady_clock::now();
+    while (engine.collisions() - start_collisions < collisions) engine.advance_to(t += chunk);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    std::int64_t events = -start_events;
+    for (const auto& [name, value] : engine.statistics()) {
+      if (name.rfind("events_", 0) == 0) events += value;
+    }
+    const double done = static_cast<double>(engine.collisions() - start_collisions);
+    const long rss_after = peak_rss_kB();
+    const double impulses = static_cast<double>(statistic(engine, "host_impulses"));
+    std::printf(
+        "particles %7d  host %-5s  cavity D=H=%.4f m  collisions %10.0f  wall %8.3f s  collisions/s %.3e  "
+        "events/s %.3e  stale/event %.2f  host impulses %.0f  re-predictions per impulse %.1f  near sweeps %lld  "
+        "bytes/sphere %.0f  energy change %.1e  balance error %.1e\n",
+        n, free_host ? "free" : "fixed", diameter, done, wall, done / wall, static_cast<double>(events) / wall,
+        static_cast<double>(statistic(engine, "events_stale")) / static_cast<double>(events + start_events),
+        impulses,
+        impulses > 0 ? static_cast<double>(statistic(engine, "imminent_repredictions") +
+                                           statistic(engine, "near_repredictions")) / impulses
+                     : 0.0,
+        static_cast<long long>(statistic(engine, "near_sweeps")),
+        1024.0 * static_cast<double>(rss_after - rss_before) / n, std::abs(total_energy(engine) - e0) / e0,
+        engine.observe().energy.balance_relative_error(e0));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pdamp_bench: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -17,13 +17,20 @@ namespace {
 constexpr double cell_margin = 1.0 + 1e-6;
 /// Root finders stop this close to contact, relative to the smallest radius.
 constexpr double relative_contact_tolerance = 1e-10;
-/// Near spheres switch to exact host-dependent predictions within this gap, relative to
-/// the smallest radius: a wider margin means rarer sweeps but more imminent spheres.
-constexpr double host_margin_fraction = 0.005;
+/// The margins of the tiers (near, imminent, close), relative to the smallest radius: a
+/// wider margin means rarer sweeps but more spheres in the tier inside it. Spheres of a
+/// landing bed close in at ~1 cm/s, one host impulse per µs: each tier holds ~50 times
+/// fewer spheres than the one outside it.
+constexpr std::array<double, 3> margin_fractions{0.1, 0.002, 4e-5};
 
 const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 
 }  // namespace
+
+HardEngine::MarginTier HardEngine::tier(std::size_t level, const Particles& initial) const {
+  return {ParticleSet(static_cast<int>(initial.size())), margin_fractions[level] * initial.radius_m.minCoeff(),
+          1.0 / fastest_host_rate_1_s_};
+}
 
 HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const RestitutionTable* calibration)
     : gravity_m_s2_(scenario.gravity_m_s2),
@@ -43,8 +50,8 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       host_stamp_(initial.size(), 0),
       last_collision_s_(initial.size(), -never),
       riding_(initial.size(), 0),
-      near_(static_cast<int>(initial.size())),
-      imminent_(static_cast<int>(initial.size())),
+      tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
+      touching_(static_cast<int>(initial.size())),
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
       free_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
@@ -52,8 +59,6 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
   host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
-  host_margin_m_ = host_margin_fraction * initial.radius_m.minCoeff();
-  host_horizon_s_ = 1.0 / fastest_host_rate_1_s_;
   // A collision cascade through a touching bed can take a few events per contact at one
   // instant; far more than that means no progress.
   stall_limit_ = 1000 * static_cast<std::int64_t>(initial.size()) + 100000;
@@ -188,9 +193,13 @@ EngineStatistics HardEngine::statistics() const {
           {"bed_knock_offs", stats_.knocked_off},
           {"bed_releases", stats_.bed_releases},
           {"host_impulses", stats_.host_impulses},
-          {"imminent_repredictions", stats_.imminent_repredictions},
-          {"near_sweeps", stats_.near_sweeps},
-          {"near_repredictions", stats_.near_repredictions},
+          {"near_sweeps", tiers_[0].sweeps},
+          {"near_repredictions", tiers_[0].repredictions},
+          {"imminent_sweeps", tiers_[1].sweeps},
+          {"imminent_repredictions", tiers_[1].repredictions},
+          {"close_sweeps", tiers_[2].sweeps},
+          {"close_repredictions", tiers_[2].repredictions},
+          {"touching_repredictions", stats_.touching_repredictions},
           {"prediction_rebuilds", stats_.rebuilds}};
 }
 
@@ -299,7 +308,7 @@ void HardEngine::predict(int i) {
                                           -v.z() - envelope, -g.z());
   const double guard = t + std::min(to_floor, to_ceiling);
   if (guard <= t) {
-    near_.insert(i);
+    tiers_[0].members.insert(i);
     predict_host_relative(i);
     return;
   }
@@ -310,16 +319,20 @@ void HardEngine::predict(int i) {
 void HardEngine::predict_host_relative(int i) {
   const double t = t_s_;
   const double horizon = t_cross_s_[i];
-  const double end = std::min(horizon, t + host_horizon_s_);
   const std::uint32_t stamp = ++host_stamp_[i];
-  const HostContact margin = host_contact(i, end, host_margin_m_);
-  if (!(margin.when.contact && margin.when.t_s <= t)) {
-    imminent_.erase(i);
-    if (margin.when.t_s < horizon) push({margin.when.t_s, i, 0, counter_[i], stamp, EventKind::host_margin});
-    return;
+  // Down the tiers while the sphere is within each one's margin.
+  for (std::size_t level = 0; level < tiers_.size(); ++level) {
+    const HostContact margin = host_contact(i, std::min(horizon, t + tiers_[level].horizon_s), tiers_[level].margin_m);
+    if (!(margin.when.contact && margin.when.t_s <= t)) {
+      for (std::size_t deeper = level + 1; deeper < tiers_.size(); ++deeper) tiers_[deeper].members.erase(i);
+      touching_.erase(i);
+      if (margin.when.t_s < horizon) push({margin.when.t_s, i, 0, counter_[i], stamp, EventKind::host_margin});
+      return;
+    }
+    if (level + 1 < tiers_.size()) tiers_[level + 1].members.insert(i);
   }
-  imminent_.insert(i);
-  const HostContact exact = host_contact(i, end, 0.0);
+  touching_.insert(i);
+  const HostContact exact = host_contact(i, std::min(horizon, t + tiers_.back().horizon_s), 0.0);
   if (exact.when.contact) {
     push({exact.when.t_s, i, exact.partner, counter_[i], stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
@@ -380,22 +393,24 @@ void HardEngine::predict_bed_release() {
 }
 
 void HardEngine::leave_host_sets(int i) {
-  near_.erase(i);
-  imminent_.erase(i);
+  for (MarginTier& tier : tiers_) tier.members.erase(i);
+  touching_.erase(i);
 }
 
-void HardEngine::sweep_near() {
+void HardEngine::sweep_tier(std::size_t level) {
   // τ → √(τ · time since the last sweep) balances sweeps against horizon ends; it moves
   // at most fourfold per sweep and stays between 10⁻³ and 1 radian of the host's fastest rate.
-  const double since = t_s_ - t_last_sweep_s_;
-  const double balanced = std::clamp(std::sqrt(host_horizon_s_ * since), 0.25 * host_horizon_s_, 4.0 * host_horizon_s_);
-  host_horizon_s_ = std::clamp(balanced, 1e-3 / fastest_host_rate_1_s_, 1.0 / fastest_host_rate_1_s_);
-  t_last_sweep_s_ = t_s_;
-  deviation_budget_m_ = 0.0;
-  ++stats_.near_sweeps;
-  near_.sweep([this](int i) {
-    near_.insert(i);
-    ++stats_.near_repredictions;
+  MarginTier& tier = tiers_[level];
+  const double since = t_s_ - tier.t_last_sweep_s;
+  const double balanced = std::clamp(std::sqrt(tier.horizon_s * since), 0.25 * tier.horizon_s, 4.0 * tier.horizon_s);
+  tier.horizon_s = std::clamp(balanced, 1e-3 / fastest_host_rate_1_s_, 1.0 / fastest_host_rate_1_s_);
+  tier.t_last_sweep_s = t_s_;
+  ++tier.sweeps;
+  // Deeper tiers' members are this tier's too: all are predicted anew.
+  for (std::size_t deeper = level; deeper < tiers_.size(); ++deeper) tiers_[deeper].budget_m = 0.0;
+  tier.members.sweep([&](int i) {
+    tier.members.insert(i);
+    ++tier.repredictions;
     predict_host_relative(i);
   });
 }
@@ -408,7 +423,7 @@ void HardEngine::repredict_near_around(const Eigen::Vector3d& lab_position) {
     for (int iy = std::max(0, c.iy - 1); iy <= std::min(grid_.ny() - 1, c.iy + 1); ++iy) {
       for (int ix = std::max(0, c.ix - 1); ix <= std::min(grid_.nx() - 1, c.ix + 1); ++ix) {
         free_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
-          if (near_.contains(j) && cell_[j].iz == iz) predict_host_relative(j);
+          if (tiers_[0].members.contains(j) && cell_[j].iz == iz) predict_host_relative(j);
         });
       }
     }
@@ -419,9 +434,11 @@ void HardEngine::rebuild_predictions() {
   ++stats_.rebuilds;
   queue_.clear();
   ++host_epoch_;
-  deviation_budget_m_ = 0.0;
-  near_.clear();
-  imminent_.clear();
+  for (MarginTier& tier : tiers_) {
+    tier.budget_m = 0.0;
+    tier.members.clear();
+  }
+  touching_.clear();
   for (int i = 0; i < static_cast<int>(particles_.size()); ++i) {
     if (!riding_[i]) predict(i);
   }
@@ -456,7 +473,7 @@ void HardEngine::handle(const Event& e) {
       return;
     case EventKind::host_check:
       ++stats_.host_check;
-      near_.insert(e.i);
+      tiers_[0].members.insert(e.i);
       predict_host_relative(e.i);
       return;
     case EventKind::host_margin:
@@ -657,16 +674,21 @@ void HardEngine::restart_host(HostState start) {
     // The new trajectory minus the old one solves the host's equation with initial
     // velocity Δv and a force Δm (g_z − z_h''), so within τ it strays by at most
     // |Δv| τ + ½ Δm (|g_z| + |z_h''|max) / M_new τ².
-    const double tau = host_horizon_s_;
     const double acceleration_change = mass_change * (std::abs(gravity_m_s2_.z()) + old_acceleration_bound) /
                                        (host_model_.mass_kg() + riding_mass_kg_);
-    deviation_budget_m_ += velocity_change * tau + 0.5 * acceleration_change * tau * tau;
+    for (MarginTier& tier : tiers_) {
+      const double tau = tier.horizon_s;
+      tier.budget_m += velocity_change * tau + 0.5 * acceleration_change * tau * tau;
+    }
   }
-  if (deviation_budget_m_ >= host_margin_m_) {
-    sweep_near();
+  // The outermost tier whose budget is spent is swept (with every tier inside it);
+  // otherwise only the touching spheres need new predictions.
+  const auto spent = std::find_if(tiers_.begin(), tiers_.end(), [](const MarginTier& t) { return t.budget_m >= t.margin_m; });
+  if (spent != tiers_.end()) {
+    sweep_tier(static_cast<std::size_t>(spent - tiers_.begin()));
   } else {
-    imminent_.sweep([this](int i) {
-      ++stats_.imminent_repredictions;
+    touching_.sweep([this](int i) {
+      ++stats_.touching_repredictions;
       predict_host_relative(i);
     });
   }

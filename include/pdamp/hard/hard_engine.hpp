@@ -9,17 +9,19 @@
 /// predicts the involved spheres' next events.
 ///
 /// Host-dependent predictions (caps, riding spheres) go out of date whenever the host's
-/// motion changes; three tiers keep that from costing O(N) per host impulse:
+/// motion changes; tiers keep that from costing O(N) per host impulse:
 /// - far: a `host_check` at the earliest time the sphere could reach a cap or the bed
 ///   if the host moved as fast as `host_speed_envelope_` allows; valid across impulses.
-/// - near (its check has fired): a `host_margin` event when the sphere comes within
-///   `host_margin_m_` of a cap or rider on the current host trajectory, or at the end of
-///   its host horizon τ. That is a lower bound on the contact time as long as the host
-///   deviates from the trajectory it was computed with by less than the margin; each
-///   impulse adds |Δv| τ + ½ Δa τ² to a deviation budget, and only when the budget
-///   reaches the margin are all near spheres predicted anew (a sweep). τ adapts so that
-///   sweeps come about once per τ, which minimises the sum of the two costs.
-/// - imminent (within the margin): exact contact predictions, redone at every impulse.
+/// - near (its check has fired) and, within it, imminent and close: a `host_margin` event when
+///   the sphere comes within the tier's margin of a cap or rider on the current host
+///   trajectory, or at the end of the tier's horizon τ. That is a lower bound on the
+///   contact time as long as the host deviates from the trajectory it was computed with
+///   by less than the margin; each impulse adds |Δv| τ + ½ Δa τ² to the tier's deviation
+///   budget, and only when the budget reaches the margin are the tier's spheres predicted
+///   anew (a sweep). τ adapts so that sweeps come about once per τ, which minimises the
+///   sum of the two costs.
+/// - touching (within the inner margin and closing): exact contact predictions, redone
+///   at every impulse.
 ///
 /// Resting: a sphere that leaves the floor, the top cap or a riding sphere slower than
 /// hard.rest_speed_m_s while the host's acceleration presses it there stops and rides
@@ -86,7 +88,7 @@ class HardEngine final : public Engine {
   void predict(int i);
   void predict_host_relative(int i);
   void predict_bed_release();
-  void sweep_near();
+  void sweep_tier(std::size_t level);
   void repredict_near_around(const Eigen::Vector3d& lab_position);
   void leave_host_sets(int i);
   void rebuild_predictions();
@@ -139,8 +141,22 @@ class HardEngine final : public Engine {
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
   std::vector<double> last_collision_s_;
   std::vector<std::uint8_t> riding_;
-  ParticleSet near_;      ///< free spheres whose host_check has fired
-  ParticleSet imminent_;  ///< near spheres within the margin: exact host-dependent predictions
+  /// Spheres whose host-dependent events are lower bounds, valid while the host strays
+  /// less than `margin_m` from the trajectory they were computed with.
+  struct MarginTier {
+    ParticleSet members;
+    double margin_m;
+    double horizon_s;         ///< τ: how far ahead its predictions look
+    double budget_m = 0.0;    ///< how far the host may have strayed since the last sweep
+    double t_last_sweep_s = 0.0;
+    std::int64_t sweeps = 0, repredictions = 0;
+  };
+  /// Near spheres (host_check fired; margin 0.1 r), within those the imminent ones (within
+  /// 0.1 r; margin 0.002 r), within those the close ones (within 0.002 r; margin 4e-5 r).
+  std::array<MarginTier, 3> tiers_;
+  /// Tier `level` for `initial`'s spheres (needs fastest_host_rate_1_s_).
+  MarginTier tier(std::size_t level, const Particles& initial) const;
+  ParticleSet touching_;  ///< within the inner margin and closing: exact predictions, redone at every impulse
 
   CellGrid grid_;            ///< lab frame, for free spheres; the host frame uses the same geometry
   CellMembers free_cells_;   ///< free spheres by lab cell
@@ -156,10 +172,6 @@ class HardEngine final : public Engine {
   HostTrajectory host_;
   std::uint32_t host_epoch_ = 0;
   double host_speed_envelope_m_s_ = 0.0;  ///< ≥ the speed bound of every trajectory since the last rebuild
-  double host_margin_m_;                  ///< near spheres get exact predictions within this gap
-  double host_horizon_s_;                 ///< τ: how far ahead a near sphere's margin prediction looks
-  double deviation_budget_m_ = 0.0;       ///< how far the host may have strayed from any margin prediction
-  double t_last_sweep_s_ = 0.0;
   double trajectory_riding_mass_kg_ = 0.0;  ///< the riding mass host_ was built with
   double t_s_ = 0.0;
   double t_host_booked_s_ = 0.0;
@@ -174,7 +186,7 @@ class HardEngine final : public Engine {
   struct Statistics {
     std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
                  host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, host_impulses = 0,
-                 imminent_repredictions = 0, near_sweeps = 0, near_repredictions = 0, rebuilds = 0;
+                 touching_repredictions = 0, rebuilds = 0;
   } stats_;
 };
 

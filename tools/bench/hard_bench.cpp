@@ -114,16 +114,18 @@ int main(int argc, char** argv) {
     const double done = static_cast<double>(engine.collisions() - start_collisions);
     const long rss_after = peak_rss_kB();
     const double impulses = static_cast<double>(statistic(engine, "host_impulses"));
+    double repredictions = 0;  // of host-dependent events, in every tier
+    for (const auto& [name, value] : engine.statistics()) {
+      if (name.ends_with("_repredictions")) repredictions += static_cast<double>(value);
+    }
     std::printf(
         "particles %7d  host %-5s  cavity D=H=%.4f m  collisions %10.0f  wall %8.3f s  collisions/s %.3e  "
-        "events/s %.3e  stale/event %.2f  host impulses %.0f  re-predictions per impulse %.1f  near sweeps %lld  "
+        "events/s %.3e  stale/event %.2f  host impulses %.0f  re-predictions per impulse %.2f  near sweeps %lld  "
         "bytes/sphere %.0f  energy change %.1e  balance error %.1e\n",
         n, free_host ? "free" : "fixed", diameter, done, wall, done / wall, static_cast<double>(events) / wall,
         static_cast<double>(statistic(engine, "events_stale")) / static_cast<double>(events + start_events),
         impulses,
-        impulses > 0 ? static_cast<double>(statistic(engine, "imminent_repredictions") +
-                                           statistic(engine, "near_repredictions")) / impulses
-                     : 0.0,
+        impulses > 0 ? repredictions / impulses : 0.0,
         static_cast<long long>(statistic(engine, "near_sweeps")),
         1024.0 * static_cast<double>(rss_after - rss_before) / n, std::abs(total_energy(engine) - e0) / e0,
         engine.observe().energy.balance_relative_error(e0));

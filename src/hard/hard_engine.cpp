@@ -22,6 +22,8 @@ constexpr double relative_contact_tolerance = 1e-10;
 /// landing bed close in at ~1 cm/s, one host impulse per µs: each tier holds ~50 times
 /// fewer spheres than the one outside it.
 constexpr std::array<double, 3> margin_fractions{0.1, 0.002, 4e-5};
+/// A sphere that collides with riders this many times at one instant is jammed among them.
+constexpr int jam_repeats = 64;
 
 const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 
@@ -49,6 +51,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       t_cross_s_(initial.size(), never),
       host_stamp_(initial.size(), 0),
       last_collision_s_(initial.size(), -never),
+      repeats_at_this_instant_(initial.size(), 0),
       riding_(initial.size(), 0),
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
@@ -192,6 +195,7 @@ EngineStatistics HardEngine::statistics() const {
           {"bed_rests", stats_.rests},
           {"bed_knock_offs", stats_.knocked_off},
           {"bed_releases", stats_.bed_releases},
+          {"bed_jammed", stats_.jammed},
           {"host_impulses", stats_.host_impulses},
           {"near_sweeps", tiers_[0].sweeps},
           {"near_repredictions", tiers_[0].repredictions},
@@ -500,6 +504,7 @@ HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, 
   // A sphere wedged between two bodies collides again at the same instant; keeping those
   // repeats inelastic lets the sequence die out instead of bouncing elastically forever.
   const bool repeat = last_collision_s_[i] == t_s_ || (j >= 0 && last_collision_s_[j] == t_s_);
+  repeats_at_this_instant_[i] = last_collision_s_[i] == t_s_ ? repeats_at_this_instant_[i] + 1 : 0;
   last_collision_s_[i] = t_s_;
   if (j >= 0) last_collision_s_[j] = t_s_;
   if (approach_speed_m_s < resting_.elastic_speed_m_s && !repeat) law.en = 1.0;
@@ -610,6 +615,14 @@ void HardEngine::collide_rider(int i, int j) {
   const Eigen::Vector3d n = -dx.normalized();
   const double approach = -dx.dot(dv) / dx.norm();
   const Eigen::Vector3d u = dv + (ri * particles_.angular_velocity_rad_s.col(i)).cross(n);
+  if (repeats_at_this_instant_[i] >= jam_repeats && approach <= resting_.rest_speed_m_s) {
+    // Wedged among riders and still colliding at this one instant: friction can turn the
+    // slip along one contact into approach towards the next for ever. The sphere is
+    // jammed in the bed, so it comes to rest in it.
+    ++stats_.jammed;
+    attach(i);
+    return;
+  }
   if (approach > resting_.rest_speed_m_s) {
     // Hit hard enough to knock the rider off: it leaves the bed with the host's velocity
     // (no momentum changes hands) and the collision is between two free spheres.

@@ -140,6 +140,7 @@ class HardEngine final : public Engine {
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
   std::vector<double> last_collision_s_;
+  std::vector<int> repeats_at_this_instant_;  ///< collisions of each sphere at last_collision_s_, less one
   std::vector<std::uint8_t> riding_;
   /// Spheres whose host-dependent events are lower bounds, valid while the host strays
   /// less than `margin_m` from the trajectory they were computed with.
@@ -185,7 +186,7 @@ class HardEngine final : public Engine {
 
   struct Statistics {
     std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
-                 host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, host_impulses = 0,
+                 host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, jammed = 0, host_impulses = 0,
                  touching_repredictions = 0, rebuilds = 0;
   } stats_;
 };

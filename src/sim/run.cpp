@@ -18,17 +18,12 @@ double observation_interval_s(const Scenario& scenario) {
   return std::min(scenario.run.sample_interval_s, 2.0 * std::numbers::pi / fastest / 256.0);
 }
 
-namespace {
-
-/// The analysis of cycles needs the host's equilibrium with the bed resting in it.
-CycleAnalyzer make_cycle_analyzer(const Scenario& scenario, const State& start) {
+CycleAnalyzer make_cycle_analyzer(const Scenario& scenario, const Particles& bed) {
   const double g_z = scenario.gravity_m_s2.z();
   const double equilibrium_z =
-      scenario.host_has_infinite_mass() ? 0.0 : start.particles.total_mass_kg() * g_z / scenario.host.stiffness_N_m;
+      scenario.host_has_infinite_mass() ? 0.0 : bed.total_mass_kg() * g_z / scenario.host.stiffness_N_m;
   return CycleAnalyzer(scenario.host.mass_kg, equilibrium_z, std::abs(g_z));
 }
-
-}  // namespace
 
 RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
                           const RunControl& control) {
@@ -45,7 +40,7 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
   const double h = sample_interval / static_cast<double>(observations_per_sample);
 
   try {
-    CycleAnalyzer cycles = make_cycle_analyzer(scenario, engine.state());
+    CycleAnalyzer cycles = make_cycle_analyzer(scenario, engine.state().particles);
     Observation now = engine.observe();
     outcome.initial_energy_J = now.energy.stored_J();
     auto record = [&](bool is_sample) {

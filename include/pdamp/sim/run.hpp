@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "pdamp/model/engine.hpp"
+#include "pdamp/analysis/cycle_analyzer.hpp"
 #include "pdamp/analysis/recorder.hpp"
 #include "pdamp/store/run_store.hpp"
 
@@ -37,5 +38,9 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
 /// How often the run loop observes the engine (s): ≥ 256 times per natural period of
 /// the host (or of the excitation, if faster), and at every sample.
 double observation_interval_s(const Scenario& scenario);
+
+/// The cycle analysis of a run starting from `bed`: it needs the host's equilibrium with
+/// the bed resting in it.
+CycleAnalyzer make_cycle_analyzer(const Scenario& scenario, const Particles& bed);
 
 }  // namespace pdamp

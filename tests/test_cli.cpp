@@ -138,6 +138,11 @@ TEST_CASE("pdamp run --model hard on small.ini: completed, balanced to 1e-9, eve
     CHECK(count_rows(db, "SELECT value FROM run_statistics WHERE run_id = 1 AND name = '" + std::string(name) + "'") > 0);
   }
   CHECK(count_rows(db, "SELECT count(*) FROM samples WHERE run_id = 1") == 601);
+  // The fill: 100 spheres of 1.5 mm in a 12 mm x 10 mm hole.
+  sqlite::Statement fill(d, "SELECT solid_fraction, impact_share + friction_share + viscous_share FROM energy_partition WHERE run_id = 1");
+  REQUIRE(fill.step());
+  CHECK(fill.column_double(0) == doctest::Approx(100 * 0.75 * 0.75 * 0.75 * 4.0 / 3.0 / (6.0 * 6.0 * 10.0)));
+  CHECK(fill.column_double(1) == doctest::Approx(1.0));
 }
 
 TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {

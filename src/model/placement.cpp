@@ -77,6 +77,11 @@ int max_particles_that_fit(const CavitySettings& cavity, double diameter_m) {
   return static_cast<int>(lattice_sites(cavity, r, 2.0 * r).size());
 }
 
+double solid_fraction(const CavitySettings& cavity, const Particles& particles) {
+  const double spheres_m3 = 4.0 / 3.0 * std::numbers::pi * particles.radius_m.array().cube().sum();
+  return spheres_m3 / (std::numbers::pi * cavity.radius_m() * cavity.radius_m() * cavity.height_m);
+}
+
 Particles place_particles(const ParticleSettings& settings, const CavitySettings& cavity, double host_z_m) {
   const int n = settings.count;
   const double d_max = settings.diameter_max_m;

@@ -5,6 +5,7 @@
 
 #include <optional>
 
+#include "pdamp/model/placement.hpp"
 #include "pdamp/sim/calibration.hpp"
 
 namespace pdamp {
@@ -20,7 +21,7 @@ StoredRun run_and_store(RunStore& store, Model model, const Scenario& scenario, 
   result.run_id = store.begin_run({std::string(to_string(model)), scenario.name, scenario.canonical_text,
                                    scenario.particles.seed, scenario.particles.count, scenario.run.duration_s,
                                    engine->time_step_s() > 0 ? std::optional(engine->time_step_s()) : std::nullopt,
-                                   bed.state_id});
+                                   bed.state_id, solid_fraction(scenario.cavity, bed.particles)});
   if (calibration) store.save_calibration(result.run_id, *calibration);
   {
     RunWriter writer(store, result.run_id);

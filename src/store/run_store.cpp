@@ -101,8 +101,8 @@ void RunStore::migrate() {
 std::int64_t RunStore::begin_run(const NewRun& run) {
   sqlite::Statement insert(db_,
                            "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, "
-                           "dt_s, pdamp_version, status, started_at, initial_state_id) "
-                           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'running', ?, ?)");
+                           "dt_s, pdamp_version, status, started_at, initial_state_id, solid_fraction) "
+                           "VALUES (?, ?, ?, ?, ?, ?, ?, ?, 'running', ?, ?, ?)");
   insert.bind(1, run.model)
       .bind(2, run.scenario_name)
       .bind(3, run.scenario_text)
@@ -113,6 +113,7 @@ std::int64_t RunStore::begin_run(const NewRun& run) {
       .bind(8, std::string_view(version_string))
       .bind(9, utc_now_iso8601());
   if (run.initial_state_id) insert.bind(10, *run.initial_state_id);
+  insert.bind(11, run.solid_fraction);
   insert.run();
   return db_.last_insert_rowid();
 }

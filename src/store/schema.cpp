@@ -200,8 +200,24 @@ SELECT c.comparison_id, c.scenario_name, c.hard_restitution, c.soft_run_id, c.ha
 FROM comparisons c;
 )sql";
 
-constexpr std::array<std::string_view, 4> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
-                                              v4_comparisons};
+/// The fill of each run (the paper's packing studies): spheres' volume over the hole's.
+constexpr std::string_view v5_solid_fraction = R"sql(
+ALTER TABLE runs ADD COLUMN solid_fraction REAL CHECK (solid_fraction >= 0);
+
+DROP VIEW energy_partition;
+CREATE VIEW energy_partition AS
+SELECT r.run_id, r.model, r.scenario_name, r.n_particles, r.solid_fraction, s.t_s,
+       s.dissipated_impact_J AS impact_J, s.dissipated_friction_J AS friction_J, s.dissipated_viscous_J AS viscous_J,
+       s.dissipated_impact_J + s.dissipated_friction_J + s.dissipated_viscous_J AS total_J,
+       s.dissipated_impact_J / nullif(s.dissipated_impact_J + s.dissipated_friction_J + s.dissipated_viscous_J, 0) AS impact_share,
+       s.dissipated_friction_J / nullif(s.dissipated_impact_J + s.dissipated_friction_J + s.dissipated_viscous_J, 0) AS friction_share,
+       s.dissipated_viscous_J / nullif(s.dissipated_impact_J + s.dissipated_friction_J + s.dissipated_viscous_J, 0) AS viscous_share
+FROM runs r JOIN samples s ON s.run_id = r.run_id
+ AND s.t_s = (SELECT max(t_s) FROM samples m WHERE m.run_id = r.run_id);
+)sql";
+
+constexpr std::array<std::string_view, 5> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
+                                              v4_comparisons, v5_solid_fraction};
 
 }  // namespace
 

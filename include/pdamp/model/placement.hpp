@@ -16,6 +16,9 @@ namespace pdamp {
 /// The most spheres of diameter `diameter_m` that the generator can place in the cavity.
 int max_particles_that_fit(const CavitySettings& cavity, double diameter_m);
 
+/// The spheres' volume over the cavity's (the fill of a damper).
+double solid_fraction(const CavitySettings& cavity, const Particles& particles);
+
 /// Places `settings.count` spheres with the cavity bottom at z = host_z_m, at rest.
 /// Diameters are uniform in [diameter_min_m, diameter_max_m]. Throws InputError if
 /// they do not fit.

@@ -30,6 +30,7 @@ struct NewRun {
   double duration_s = 0.0;
   std::optional<double> dt_s;  ///< time step of a time-stepped engine
   std::optional<std::int64_t> initial_state_id;  ///< the settled bed the run started from
+  double solid_fraction = 0.0;  ///< the spheres' volume over the hole's
 };
 
 /// A settled bed kept for other runs (and the other engine) to start from.

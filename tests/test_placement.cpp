@@ -71,3 +71,23 @@ TEST_CASE("overlapping spheres are separated from each other and from the walls"
   CHECK(moved > 4e-6);
   CHECK(moved < 3e-5);
 }
+
+TEST_CASE("a deep bed's overlaps, which add up along its columns, are separated") {
+  // Columns of 40 spheres, each 1 % of a radius into the one below and the lowest into the
+  // floor, as a settled soft bed under its own weight: the whole column must rise by 40 x
+  // that overlap. Table 2's settled bed is such a case.
+  const CavitySettings cavity{0.01, 0.05};
+  const double r = 0.0005, overlap = 0.01 * r;
+  Particles p(80);
+  p.radius_m.setConstant(r);
+  p.mass_kg.setConstant(1e-6);
+  for (int k = 0; k < 40; ++k) {
+    const double z = r - overlap + k * (2 * r - overlap);
+    p.position_m.col(k) << -0.001, 0.0, z;
+    p.position_m.col(40 + k) << 0.001 - overlap, 0.0, z;  // and 1 % into its neighbour column
+  }
+  const double moved = separate_overlaps(p, cavity, 0.0);
+  check_valid(p, cavity, 0.0);
+  CHECK(moved >= 40 * overlap);
+  CHECK(moved < 0.05 * r * 40);
+}

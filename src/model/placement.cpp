@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 #include <random>
 #include <sstream>
 #include <vector>
@@ -139,22 +140,39 @@ double separate_overlaps(Particles& particles, const CavitySettings& settings, d
   const CellGrid grid(settings.radius_m(), settings.height_m, 2.0 * particles.max_radius_m() + 2.0 * margin);
   CellList cells;
   std::array<int, 27> neighbours{};
+  std::vector<int> order(static_cast<std::size_t>(n)), rank(static_cast<std::size_t>(n));
   for (int sweep = 0; sweep < 1000; ++sweep) {
     bool moved = false;
     cells.build(grid, particles.position_m);
-    for (int i = 0; i < n; ++i) {
+    // Bottom up, each sphere moves out of those it rests on (and out of the walls): a bed's
+    // overlaps add up along its columns, and this lifts a whole column in one sweep, where
+    // pushing pairs apart symmetrically passes them up one layer a sweep. Side by side
+    // contacts are pushed apart half each, so that a sphere against the side wall can
+    // move its neighbour rather than be pushed back into it.
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      const double za = particles.position_m(2, a), zb = particles.position_m(2, b);
+      return za < zb || (za == zb && a < b);
+    });
+    for (int k = 0; k < n; ++k) rank[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
+    for (const int i : order) {
       auto xi = particles.position_m.col(i);
       const int count = grid.neighbours(grid.coord_of(xi), neighbours);
       for (int c = 0; c < count; ++c) {
         for (const int j : cells.particles_in(neighbours[c])) {
-          if (j <= i) continue;
+          if (rank[static_cast<std::size_t>(j)] >= rank[static_cast<std::size_t>(i)]) continue;
           auto xj = particles.position_m.col(j);
           const Eigen::Vector3d d = xi - xj;
-          const double overlap = particles.radius_m[i] + particles.radius_m[j] - d.norm();
+          const double distance = d.norm(), overlap = particles.radius_m[i] + particles.radius_m[j] - distance;
           if (overlap <= 0.0) continue;
-          const Eigen::Vector3d push = 0.5 * (overlap + margin) * d.normalized();
-          xi += push;
-          xj -= push;
+          const Eigen::Vector3d push = (overlap + margin) / distance * d;
+          const bool resting_on_j = d.z() > 0.5 * distance;
+          if (resting_on_j) {
+            xi += push;
+          } else {
+            xi += 0.5 * push;
+            xj -= 0.5 * push;
+          }
           moved = true;
         }
       }

@@ -25,8 +25,8 @@ double solid_fraction(const CavitySettings& cavity, const Particles& particles);
 Particles place_particles(const ParticleSettings& settings, const CavitySettings& cavity,
                           double host_z_m);
 
-/// Moves overlapping spheres apart — from each other along the line of centres, half each,
-/// and out of the walls — until no two touch, so a bed settled with soft contacts (whose
+/// Moves overlapping spheres apart — bottom up, each out of the spheres it rests on along
+/// the line of centres, side-by-side pairs half each, and out of the walls — until no two touch, so a bed settled with soft contacts (whose
 /// overlaps are a tiny fraction of a radius at rest) can start a hard-sphere run. Returns the
 /// largest distance a sphere was moved (m). Throws RuntimeFailure if 1000 sweeps do not
 /// separate them (overlaps far beyond a resting bed's).

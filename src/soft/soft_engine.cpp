@@ -90,7 +90,13 @@ void SoftEngine::check_particles_inside() const {
     if (!x_[i].allFinite() || cavity_.clearance_m(x_[i], radius_[i], host_.z_m) < -radius_[i]) {
       std::ostringstream msg;
       msg << "particle " << i << " left the cavity at t = " << t_s_ << " s (position " << x_[i].transpose()
-          << " m); the time step " << dt_s_ << " s is too long for these contacts";
+          << " m): a contact let it through. Contacts overlapped up to " << 100.0 * max_overlap_ratio_
+          << " % of a radius: ";
+      if (max_overlap_ratio_ > 0.5) {
+        msg << "the contact law is too soft to stop impacts this fast (a stiffer k_n or a gentler excitation would)";
+      } else {
+        msg << "the time step " << dt_s_ << " s is too long for these contacts";
+      }
       throw RuntimeFailure(msg.str());
     }
   }

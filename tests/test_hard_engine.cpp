@@ -306,3 +306,30 @@ TEST_CASE("overlapping initial spheres (a soft-settled bed) are pushed just apar
   REQUIRE(pushed.warnings().size() == 1);
   CHECK(pushed.warnings()[0].find("overlapped") != std::string::npos);
 }
+
+TEST_CASE("a host impulse cannot drive a cap into a sphere that touches it while receding") {
+  // Regression: a sphere within a tier's margin of a cap but receding (a bed just released
+  // from the top cap) stayed in the outer tier, whose host_margin event is a lower bound on
+  // contact only for a host that strays less than the sphere's gap, not the margin. A host
+  // impulse (here another sphere hitting the top cap) then drove the floor into it unseen.
+  // A free host (10 rad/s) carrying sphere A on its floor, A moving with the floor and
+  // receding from it only as the host decelerates (no gravity); sphere B hits the top cap
+  // after 0.4 ms and pushes the host up by 1.6e-4 m/s, far within the outer tier's budget.
+  const Scenario s = test::scenario_from(
+      "[host]\nmass_kg = 0.01\nstiffness_N_m = 1\ndamping_N_s_m = 0\nz0_m = 0\nv0_m_s = 0.1\n"
+      "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.008\nheight_m = 0.006\n"
+      "[particles]\ncount = 2\ndiameter_m = 0.0015\n[hard]\nen = 1\nmu = 0\n[hard_wall]\nen = 1\nmu = 0\n");
+  const double r = 0.00075;
+  Particles p(2);
+  for (int i = 0; i < 2; ++i) p.radius_m[i] = r, p.mass_kg[i] = 1.6e-5;
+  p.position_m.col(0) = Eigen::Vector3d(-0.002, 0, r);  // A: touching the floor
+  p.velocity_m_s.col(0) = Eigen::Vector3d(0, 0, 0.1);   // the floor's velocity
+  p.position_m.col(1) = Eigen::Vector3d(0.002, 0, 0.006 - r - 2e-5);  // B: 20 um below the top cap
+  p.velocity_m_s.col(1) = Eigen::Vector3d(0, 0, 0.15);                 // closing at 0.05 m/s
+  HardEngine engine(s, p);
+  for (int k = 1; k <= 200; ++k) {
+    engine.advance_to(5e-6 * k);
+    REQUIRE(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+  }
+  CHECK(statistic(engine, "events_cap") >= 2);  // B on the top cap, then the floor catches A
+}

@@ -27,7 +27,8 @@ double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, 
 }
 
 Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double height_m, const HostTrajectory& host,
-                     const HostState& host_at_t0, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m) {
+                     const HostState& host_at_t0, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m,
+                     double min_closing_rate_m_s) {
   // Bottom: gap = z − r − z_h; top: gap = z_h + H − z − r. |gap''| = |g_z − z_h''|.
   const double sign = top ? -1.0 : 1.0;
   const double offset = top ? radius_m - height_m : radius_m;
@@ -37,12 +38,12 @@ Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double 
     return GapSample{sign * (z - h.z_m) - offset, sign * (vz - h.v_m_s)};
   };
   return earliest_contact(gap, t0, t1, std::abs(g.z()) + host.acceleration_bound_m_s2(), tolerance_m,
-                          min_approach_speed_m_s);
+                          min_closing_rate_m_s);
 }
 
 Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, double contact_distance_m,
                        const HostTrajectory& host, const HostState& host_at_t0, const Eigen::Vector3d& g, double t0,
-                       double t1, double tolerance_m) {
+                       double t1, double tolerance_m, double min_closing_rate_m_s) {
   // The surface gap d = |dx| − σ has d'' = (|dv|² − d'²)/|dx| + dx·da/|dx|, so while the
   // spheres are apart (|dx| ≥ σ) |d''| ≤ V²/σ + A, with A = |g| + |z_h''|max bounding the
   // relative acceleration and V = |dv(t0)| + A (t1 − t0) the relative speed.
@@ -60,7 +61,7 @@ Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, 
     const double distance = dx.norm();
     return GapSample{distance - contact_distance_m, dx.dot(dv) / distance};
   };
-  return earliest_contact(gap, t0, t1, curvature, tolerance_m, min_approach_speed_m_s);
+  return earliest_contact(gap, t0, t1, curvature, tolerance_m, min_closing_rate_m_s);
 }
 
 Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0, double t1,

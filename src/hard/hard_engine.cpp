@@ -349,14 +349,19 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   const Ballistic f = flight(i);
   const double r = particles_.radius_m[i];
   HostContact best{{end_s, false}, EventKind::host_margin, 0};
+  // A margin is reached whichever way the sphere moves: a sphere within it but receding
+  // can still be caught by a host that strays by less than the margin.
+  const double closing = margin_m > 0.0 ? within_margin : min_approach_speed_m_s;
   auto consider = [&](const Approach& a, EventKind kind, int partner) {
     if (a.t_s < best.when.t_s || (a.contact && !best.when.contact && a.t_s == best.when.t_s)) best = {a, kind, partner};
   };
   const double height = cavity_.height_m();
   const HostState host = host_.at(t);
-  consider(cap_contact(f, r + margin_m, false, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_),
+  consider(cap_contact(f, r + margin_m, false, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_,
+                       closing),
            EventKind::bottom_cap, 0);
-  consider(cap_contact(f, r + margin_m, true, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_),
+  consider(cap_contact(f, r + margin_m, true, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_,
+                       closing),
            EventKind::top_cap, 0);
   if (riding_count_ == 0) return best;
   // Riders within reach of the sphere's host-frame path until the host has moved at most
@@ -377,7 +382,7 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
       for (int ix = low.ix; ix <= high.ix; ++ix) {
         rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
           consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j] + margin_m, host_, host,
-                                 gravity_m_s2_, t, window_end, contact_tolerance_m_),
+                                 gravity_m_s2_, t, window_end, contact_tolerance_m_, closing),
                    EventKind::rider, j);
         });
       }

@@ -45,6 +45,10 @@ double time_to_close(double gap, double rate, double accel);
 /// approach; `never` if they do not meet.
 double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m);
 
+/// A closing rate for `earliest_contact` that makes it report the first time the gap is
+/// within the tolerance, closing or not: the question a margin asks.
+inline constexpr double within_margin = -never;
+
 /// Result of a conservative search on [t0, t1]: a contact at t_s, or none before t_s
 /// (t1, or the point where the search stopped early and must be resumed).
 struct Approach {
@@ -86,14 +90,17 @@ Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound,
 
 /// The first contact of a free sphere with the bottom or top cap of a cavity of height
 /// `height_m` moving with `host` (whose state at t0 the caller has at hand), on [t0, t1].
+/// `min_closing_rate_m_s` as for earliest_contact; `within_margin` (−∞) reports the first
+/// time the gap is within the tolerance whichever way it moves.
 Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double height_m, const HostTrajectory& host,
-                     const HostState& host_at_t0, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m);
+                     const HostState& host_at_t0, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m,
+                     double min_closing_rate_m_s = min_approach_speed_m_s);
 
 /// The first contact of a free sphere with a sphere riding on the host at host-frame
 /// position `rider_m` (lab position rider_m + z_host e_z), contact distance σ, on [t0, t1].
 Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, double contact_distance_m,
                        const HostTrajectory& host, const HostState& host_at_t0, const Eigen::Vector3d& g, double t0,
-                       double t1, double tolerance_m);
+                       double t1, double tolerance_m, double min_closing_rate_m_s = min_approach_speed_m_s);
 
 /// The first contact with the side wall (the centre reaching distance `reach_m` = R − r
 /// from the axis) on [t0, t1].

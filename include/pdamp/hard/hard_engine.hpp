@@ -16,11 +16,12 @@
 ///   the sphere comes within the tier's margin of a cap or rider on the current host
 ///   trajectory, or at the end of the tier's horizon τ. That is a lower bound on the
 ///   contact time as long as the host deviates from the trajectory it was computed with
-///   by less than the margin; each impulse adds |Δv| τ + ½ Δa τ² to the tier's deviation
-///   budget, and only when the budget reaches the margin are the tier's spheres predicted
-///   anew (a sweep). τ adapts so that sweeps come about once per τ, which minimises the
-///   sum of the two costs.
-/// - touching (within the inner margin and closing): exact contact predictions, redone
+///   by less than the margin, and only for a sphere outside the margin: one within it,
+///   closing or receding, belongs to the next tier. Each impulse adds |Δv| τ + ½ Δa τ² to
+///   the tier's deviation budget, and only when the budget reaches the margin are the
+///   tier's spheres predicted anew (a sweep). τ adapts so that sweeps come about once
+///   per τ, which minimises the sum of the two costs.
+/// - touching (within the inner margin, closing or not): exact contact predictions, redone
 ///   at every impulse.
 ///
 /// Resting: a sphere that leaves the floor, the top cap or a riding sphere slower than
@@ -157,7 +158,7 @@ class HardEngine final : public Engine {
   std::array<MarginTier, 3> tiers_;
   /// Tier `level` for `initial`'s spheres (needs fastest_host_rate_1_s_).
   MarginTier tier(std::size_t level, const Particles& initial) const;
-  ParticleSet touching_;  ///< within the inner margin and closing: exact predictions, redone at every impulse
+  ParticleSet touching_;  ///< within the inner margin: exact predictions, redone at every impulse
 
   CellGrid grid_;            ///< lab frame, for free spheres; the host frame uses the same geometry
   CellMembers free_cells_;   ///< free spheres by lab cell

@@ -58,6 +58,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
       free_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
+      queue_(static_cast<int>(initial.size())),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
@@ -86,8 +87,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
 // Time and state
 
 void HardEngine::advance_to(double t_s) {
-  while (!queue_.empty() && queue_.top().t_s <= t_s) {
-    const Event event = queue_.top();
+  const auto current = [this](const Event& e) { return is_current(e); };
+  for (const Event* next = queue_.top(current); next && next->t_s <= t_s; next = queue_.top(current)) {
+    const Event event = *next;
     queue_.pop();
     if (!is_current(event)) {
       ++stats_.stale;
@@ -532,8 +534,8 @@ void HardEngine::collide_spheres(int i, int j) {
   particles_.angular_velocity_rad_s.col(j) += rj * torque_arm / particles_.moment_of_inertia(j);
   impact_J_ += out.impact_J;
   friction_J_ += out.friction_J;
-  ++counter_[i];
-  ++counter_[j];
+  new_trajectory(i);
+  new_trajectory(j);
   predict(i);
   predict(j);
 }
@@ -549,7 +551,7 @@ void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const Colli
   particles_.angular_velocity_rad_s.col(i) += r * n.cross(p) / particles_.moment_of_inertia(static_cast<Eigen::Index>(i));
   impact_J_ += out.impact_J;
   friction_J_ += out.friction_J;
-  ++counter_[i];
+  new_trajectory(i);
   leave_host_sets(i);
   if (host_model_.has_infinite_mass()) {
     excitation_J_ += p.z() * host.v_m_s;  // the wall's work on the sphere
@@ -749,7 +751,7 @@ void HardEngine::attach(int i) {
   const Eigen::Vector3d lab_position = particles_.position_m.col(i);
   free_cells_.remove(i);
   leave_host_sets(i);
-  ++counter_[i];
+  new_trajectory(i);
   riding_[i] = 1;
   const Eigen::Vector3d host_frame = particles_.position_m.col(i) - host.z_m * e_z;
   particles_.position_m.col(i) = host_frame;
@@ -774,7 +776,7 @@ void HardEngine::detach(int i, const HostState& host) {
   book_host(t_s_);  // with the riding mass of the interval that ends now
   rider_cells_.remove(i);
   riding_[i] = 0;
-  ++counter_[i];
+  new_trajectory(i);
   particles_.position_m.col(i) += host.z_m * e_z;
   particles_.velocity_m_s.col(i) = host.v_m_s * e_z;
   t_ref_s_[i] = t_s_;

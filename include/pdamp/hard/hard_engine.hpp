@@ -77,6 +77,11 @@ class HardEngine final : public Engine {
   /// Lab-frame position of any sphere now (free or riding).
   Eigen::Vector3d position_now(int i, const HostState& host) const;
   void bring_to_now(int i);
+  /// Sphere i's trajectory changed: every event predicted for it is out of date.
+  void new_trajectory(int i) {
+    ++counter_[i];
+    queue_.forget(i);
+  }
   double host_inverse_mass_1_kg() const;
   /// The law of a collision of i with j (−1 for a wall or rider) at this approach speed:
   /// calibrated e_n and β0 if any, and e_n = 1 for slow first collisions (see

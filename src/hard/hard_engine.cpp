@@ -48,6 +48,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       t_ref_s_(initial.size(), 0.0),
       counter_(initial.size(), 0),
       cell_(initial.size()),
+      around_(initial.size()),
       t_cross_s_(initial.size(), never),
       host_stamp_(initial.size(), 0),
       last_collision_s_(initial.size(), -never),
@@ -71,8 +72,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
   separation_m_ = separate_overlaps(particles_, scenario.cavity, host_.at(0.0).z_m);
   const int n = static_cast<int>(particles_.size());
   for (int i = 0; i < n; ++i) {
-    cell_[i] = grid_.coord_of(particles_.position_m.col(i));
-    free_cells_.insert(i, grid_.index(cell_[i]));
+    enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
   }
   if (const double overlap = max_overlap_m(); overlap > 0.0) {
     std::ostringstream why;
@@ -284,15 +284,19 @@ void HardEngine::predict(int i) {
   t_cross_s_[i] = horizon;
   if (face >= 0) push({horizon, i, face, counter_[i], 0, EventKind::cell_crossing});
 
-  std::array<int, 27> around{};
-  const int count = grid_.neighbours(c, around);
-  for (int k = 0; k < count; ++k) {
-    free_cells_.for_each_in(around[k], [&](int j) {
-      if (j == i) return;
-      const Ballistic fj = flight(j);
-      const double s = sphere_sphere_time(x - fj.position_at(t, g), v - fj.velocity_at(t, g), r + particles_.radius_m[j]);
-      if (t + s < horizon) push({t + s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
+  // The spheres around first, then their contact times in one loop that does not wait
+  // on walking the cells' lists.
+  const Around& around = around_[i];
+  neighbours_.clear();
+  for (int k = 0; k < around.count; ++k) {
+    free_cells_.for_each_in(around.cells[k], [&](int j) {
+      if (j != i) neighbours_.push_back(j);
     });
+  }
+  for (const int j : neighbours_) {
+    const Ballistic fj = flight(j);
+    const double s = sphere_sphere_time(x - fj.position_at(t, g), v - fj.velocity_at(t, g), r + particles_.radius_m[j]);
+    if (t + s < horizon) push({t + s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
   }
 
   // The side wall, if any point of the cell is within reach of it.
@@ -642,15 +646,23 @@ void HardEngine::collide_rider(int i, int j) {
 }
 
 void HardEngine::cross_face(int i, Face face) {
-  CellCoord& c = cell_[i];
+  CellCoord c = cell_[i];
   const int step = face % 2 == 1 ? 1 : -1;
   switch (face / 2) {
     case 0: c.ix += step; break;
     case 1: c.iy += step; break;
     default: c.iz += step; break;
   }
-  free_cells_.move(i, grid_.index(c));
+  free_cells_.remove(i);
+  enter_cell(i, c);
   predict(i);
+}
+
+void HardEngine::enter_cell(int i, const CellCoord& c) {
+  cell_[i] = c;
+  Around& a = around_[i];
+  a.count = grid_.neighbours(c, a.cells);
+  free_cells_.insert(i, grid_.index(c));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -780,8 +792,7 @@ void HardEngine::detach(int i, const HostState& host) {
   particles_.position_m.col(i) += host.z_m * e_z;
   particles_.velocity_m_s.col(i) = host.v_m_s * e_z;
   t_ref_s_[i] = t_s_;
-  cell_[i] = grid_.coord_of(particles_.position_m.col(i));
-  free_cells_.insert(i, grid_.index(cell_[i]));
+  enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
   --riding_count_;
   riding_mass_kg_ = riding_count_ > 0 ? riding_mass_kg_ - particles_.mass_kg[i] : 0.0;
 }

@@ -114,6 +114,8 @@ class HardEngine final : public Engine {
   void collide_rider(int i, int j);
   void turn_along_side_wall(int i, const Eigen::Vector3d& outward);
   void cross_face(int i, Face face);
+  /// Puts free sphere i into cell c (it must be in none).
+  void enter_cell(int i, const CellCoord& c);
   void release_bed();
 
   // The host and the bed.
@@ -142,6 +144,13 @@ class HardEngine final : public Engine {
   std::vector<double> t_ref_s_;
   std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
+  /// The cells around each free sphere's cell (itself included), kept because every
+  /// prediction needs them and working them out costs two integer divisions per cell.
+  struct Around {
+    std::array<int, 27> cells;
+    int count;
+  };
+  std::vector<Around> around_;
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
   std::vector<double> last_collision_s_;
@@ -168,6 +177,7 @@ class HardEngine final : public Engine {
   CellMembers free_cells_;   ///< free spheres by lab cell
   CellMembers rider_cells_;  ///< riding spheres by host-frame cell
   EventQueue queue_;
+  std::vector<int> neighbours_;  ///< predict's scratch: the free spheres around the one predicted
   double contact_tolerance_m_;
   double max_radius_m_;
   double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart

@@ -123,6 +123,11 @@ Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {
   return flight(i).position_at(t_s_, gravity_m_s2_);
 }
 
+HostState HardEngine::host_now() const {
+  if (host_now_.t_s != t_s_ || host_now_.epoch != host_epoch_) host_now_ = {t_s_, host_epoch_, host_.at(t_s_)};
+  return host_now_.state;
+}
+
 void HardEngine::bring_to_now(int i) {
   const Ballistic f = flight(i);
   particles_.position_m.col(i) = f.position_at(t_s_, gravity_m_s2_);
@@ -311,7 +316,7 @@ void HardEngine::predict(int i) {
 
   // Caps and the resting bed: a guard from the host's speed envelope, or exact predictions.
   ++host_stamp_[i];  // whatever host-dependent event i had is replaced
-  const HostState host = host_.at(t);
+  const HostState host = host_now();
   const double envelope = host_speed_envelope_m_s_;
   const double to_floor = time_to_close(x.z() - r - host.z_m - bed_depth_bound_m_, v.z() - envelope, g.z());
   const double to_ceiling = time_to_close(host.z_m + cavity_.height_m() - bed_depth_bound_m_ - x.z() - r,
@@ -359,7 +364,7 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
     if (a.t_s < best.when.t_s || (a.contact && !best.when.contact && a.t_s == best.when.t_s)) best = {a, kind, partner};
   };
   const double height = cavity_.height_m();
-  const HostState host = host_.at(t);
+  const HostState host = host_now();
   consider(cap_contact(f, r + margin_m, false, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_),
            EventKind::bottom_cap, 0);
   consider(cap_contact(f, r + margin_m, true, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_),

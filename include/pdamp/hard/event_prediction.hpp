@@ -63,7 +63,7 @@ inline double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3
   const double b = dx.dot(dv);
   const double c = dx.squaredNorm() - contact_distance_m * contact_distance_m;
   const double discriminant = b * b - dv.squaredNorm() * c;
-  const double root = c / (std::sqrt(std::max(discriminant, 0.0)) - b);
+  const double root = c / (std::sqrt(discriminant) - b);  // NaN if they miss: discarded below
   const double meeting = discriminant < 0 ? never : root;
   const double unless_overlapping = c <= 0 ? 0.0 : meeting;
   return b >= -min_approach_speed_m_s * contact_distance_m ? never : unless_overlapping;

@@ -77,6 +77,8 @@ class HardEngine final : public Engine {
   /// Lab-frame position of any sphere now (free or riding).
   Eigen::Vector3d position_now(int i, const HostState& host) const;
   void bring_to_now(int i);
+  /// host_.at(t_s_), which every prediction needs: the two of a collision share it.
+  HostState host_now() const;
   /// Sphere i's trajectory changed: every event predicted for it is out of date.
   void new_trajectory(int i) {
     ++counter_[i];
@@ -186,7 +188,13 @@ class HardEngine final : public Engine {
 
   // Host.
   HostTrajectory host_;
-  std::uint32_t host_epoch_ = 0;
+  std::uint32_t host_epoch_ = 0;  ///< bumped whenever host_ is replaced
+  struct HostNow {
+    double t_s;
+    std::uint32_t epoch;
+    HostState state;
+  };
+  mutable HostNow host_now_{-never, 0, {}};  ///< host_now()'s last answer
   double host_speed_envelope_m_s_ = 0.0;  ///< ≥ the speed bound of every trajectory since the last rebuild
   double trajectory_riding_mass_kg_ = 0.0;  ///< the riding mass host_ was built with
   double t_s_ = 0.0;

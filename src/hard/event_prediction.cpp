@@ -5,27 +5,6 @@
 
 namespace pdamp::hard {
 
-double time_to_close(double gap, double rate, double accel) {
-  gap = std::max(gap, 0.0);
-  if (rate < 0) {
-    const double discriminant = rate * rate - 2.0 * accel * gap;
-    if (discriminant < 0) return never;
-    return 2.0 * gap / (std::sqrt(discriminant) - rate);  // the smaller root, without cancellation
-  }
-  if (accel >= 0) return never;
-  return (rate + std::sqrt(rate * rate - 2.0 * accel * gap)) / -accel;
-}
-
-double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m) {
-  const double b = dx.dot(dv);
-  if (b >= -min_approach_speed_m_s * contact_distance_m) return never;
-  const double c = dx.squaredNorm() - contact_distance_m * contact_distance_m;
-  if (c <= 0) return 0.0;
-  const double discriminant = b * b - dv.squaredNorm() * c;
-  if (discriminant < 0) return never;
-  return c / (std::sqrt(discriminant) - b);
-}
-
 Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double height_m, const HostTrajectory& host,
                      const HostState& host_at_t0, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m,
                      double min_closing_rate_m_s) {

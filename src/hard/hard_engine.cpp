@@ -48,6 +48,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       t_ref_s_(initial.size(), 0.0),
       counter_(initial.size(), 0),
       cell_(initial.size()),
+      around_(initial.size()),
       t_cross_s_(initial.size(), never),
       host_stamp_(initial.size(), 0),
       last_collision_s_(initial.size(), -never),
@@ -58,6 +59,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
       free_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
+      queue_(static_cast<int>(initial.size())),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
@@ -70,8 +72,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
   separation_m_ = separate_overlaps(particles_, scenario.cavity, host_.at(0.0).z_m);
   const int n = static_cast<int>(particles_.size());
   for (int i = 0; i < n; ++i) {
-    cell_[i] = grid_.coord_of(particles_.position_m.col(i));
-    free_cells_.insert(i, grid_.index(cell_[i]));
+    enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
   }
   if (const double overlap = max_overlap_m(); overlap > 0.0) {
     std::ostringstream why;
@@ -86,8 +87,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
 // Time and state
 
 void HardEngine::advance_to(double t_s) {
-  while (!queue_.empty() && queue_.top().t_s <= t_s) {
-    const Event event = queue_.top();
+  const auto current = [this](const Event& e) { return is_current(e); };
+  for (const Event* next = queue_.top(current); next && next->t_s <= t_s; next = queue_.top(current)) {
+    const Event event = *next;
     queue_.pop();
     if (!is_current(event)) {
       ++stats_.stale;
@@ -119,6 +121,11 @@ void HardEngine::advance_to(double t_s) {
 Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {
   if (riding_[i]) return particles_.position_m.col(i) + host.z_m * e_z;
   return flight(i).position_at(t_s_, gravity_m_s2_);
+}
+
+HostState HardEngine::host_now() const {
+  if (host_now_.t_s != t_s_ || host_now_.epoch != host_epoch_) host_now_ = {t_s_, host_epoch_, host_.at(t_s_)};
+  return host_now_.state;
 }
 
 void HardEngine::bring_to_now(int i) {
@@ -282,15 +289,19 @@ void HardEngine::predict(int i) {
   t_cross_s_[i] = horizon;
   if (face >= 0) push({horizon, i, face, counter_[i], 0, EventKind::cell_crossing});
 
-  std::array<int, 27> around{};
-  const int count = grid_.neighbours(c, around);
-  for (int k = 0; k < count; ++k) {
-    free_cells_.for_each_in(around[k], [&](int j) {
-      if (j == i) return;
-      const Ballistic fj = flight(j);
-      const double s = sphere_sphere_time(x - fj.position_at(t, g), v - fj.velocity_at(t, g), r + particles_.radius_m[j]);
-      if (t + s < horizon) push({t + s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
+  // The spheres around first, then their contact times in one loop that does not wait
+  // on walking the cells' lists.
+  const Around& around = around_[i];
+  neighbours_.clear();
+  for (int k = 0; k < around.count; ++k) {
+    free_cells_.for_each_in(around.cells[k], [&](int j) {
+      if (j != i) neighbours_.push_back(j);
     });
+  }
+  for (const int j : neighbours_) {
+    const Ballistic fj = flight(j);
+    const double s = sphere_sphere_time(x - fj.position_at(t, g), v - fj.velocity_at(t, g), r + particles_.radius_m[j]);
+    if (t + s < horizon) push({t + s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
   }
 
   // The side wall, if any point of the cell is within reach of it.
@@ -305,7 +316,7 @@ void HardEngine::predict(int i) {
 
   // Caps and the resting bed: a guard from the host's speed envelope, or exact predictions.
   ++host_stamp_[i];  // whatever host-dependent event i had is replaced
-  const HostState host = host_.at(t);
+  const HostState host = host_now();
   const double envelope = host_speed_envelope_m_s_;
   const double to_floor = time_to_close(x.z() - r - host.z_m - bed_depth_bound_m_, v.z() - envelope, g.z());
   const double to_ceiling = time_to_close(host.z_m + cavity_.height_m() - bed_depth_bound_m_ - x.z() - r,
@@ -356,7 +367,7 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
     if (a.t_s < best.when.t_s || (a.contact && !best.when.contact && a.t_s == best.when.t_s)) best = {a, kind, partner};
   };
   const double height = cavity_.height_m();
-  const HostState host = host_.at(t);
+  const HostState host = host_now();
   consider(cap_contact(f, r + margin_m, false, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_,
                        closing),
            EventKind::bottom_cap, 0);
@@ -537,8 +548,8 @@ void HardEngine::collide_spheres(int i, int j) {
   particles_.angular_velocity_rad_s.col(j) += rj * torque_arm / particles_.moment_of_inertia(j);
   impact_J_ += out.impact_J;
   friction_J_ += out.friction_J;
-  ++counter_[i];
-  ++counter_[j];
+  new_trajectory(i);
+  new_trajectory(j);
   predict(i);
   predict(j);
 }
@@ -554,7 +565,7 @@ void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const Colli
   particles_.angular_velocity_rad_s.col(i) += r * n.cross(p) / particles_.moment_of_inertia(static_cast<Eigen::Index>(i));
   impact_J_ += out.impact_J;
   friction_J_ += out.friction_J;
-  ++counter_[i];
+  new_trajectory(i);
   leave_host_sets(i);
   if (host_model_.has_infinite_mass()) {
     excitation_J_ += p.z() * host.v_m_s;  // the wall's work on the sphere
@@ -645,15 +656,23 @@ void HardEngine::collide_rider(int i, int j) {
 }
 
 void HardEngine::cross_face(int i, Face face) {
-  CellCoord& c = cell_[i];
+  CellCoord c = cell_[i];
   const int step = face % 2 == 1 ? 1 : -1;
   switch (face / 2) {
     case 0: c.ix += step; break;
     case 1: c.iy += step; break;
     default: c.iz += step; break;
   }
-  free_cells_.move(i, grid_.index(c));
+  free_cells_.remove(i);
+  enter_cell(i, c);
   predict(i);
+}
+
+void HardEngine::enter_cell(int i, const CellCoord& c) {
+  cell_[i] = c;
+  Around& a = around_[i];
+  a.count = grid_.neighbours(c, a.cells);
+  free_cells_.insert(i, grid_.index(c));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -754,7 +773,7 @@ void HardEngine::attach(int i) {
   const Eigen::Vector3d lab_position = particles_.position_m.col(i);
   free_cells_.remove(i);
   leave_host_sets(i);
-  ++counter_[i];
+  new_trajectory(i);
   riding_[i] = 1;
   const Eigen::Vector3d host_frame = particles_.position_m.col(i) - host.z_m * e_z;
   particles_.position_m.col(i) = host_frame;
@@ -779,12 +798,11 @@ void HardEngine::detach(int i, const HostState& host) {
   book_host(t_s_);  // with the riding mass of the interval that ends now
   rider_cells_.remove(i);
   riding_[i] = 0;
-  ++counter_[i];
+  new_trajectory(i);
   particles_.position_m.col(i) += host.z_m * e_z;
   particles_.velocity_m_s.col(i) = host.v_m_s * e_z;
   t_ref_s_[i] = t_s_;
-  cell_[i] = grid_.coord_of(particles_.position_m.col(i));
-  free_cells_.insert(i, grid_.index(cell_[i]));
+  enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
   --riding_count_;
   riding_mass_kg_ = riding_count_ > 0 ? riding_mass_kg_ - particles_.mass_kg[i] : 0.0;
 }

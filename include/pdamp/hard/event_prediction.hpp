@@ -12,6 +12,8 @@
 ///   can never skip an earlier contact.
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "pdamp/model/host.hpp"
@@ -36,14 +38,36 @@ struct Ballistic {
   Eigen::Vector3d velocity_at(double t_s, const Eigen::Vector3d& g) const { return v0_m_s + (t_s - t0_s) * g; }
 };
 
+// Inline: these two run for every neighbour and cell face at every prediction.
+
 /// The first s ≥ 0 at which gap + rate·s + ½ accel·s² reaches 0, or `never`. A gap
 /// that round-off made negative counts as 0 (touching).
-double time_to_close(double gap, double rate, double accel);
+inline double time_to_close(double gap, double rate, double accel) {
+  gap = std::max(gap, 0.0);
+  if (rate < 0) {
+    const double discriminant = rate * rate - 2.0 * accel * gap;
+    if (discriminant < 0) return never;
+    return 2.0 * gap / (std::sqrt(discriminant) - rate);  // the smaller root, without cancellation
+  }
+  if (accel >= 0) return never;
+  return (rate + std::sqrt(rate * rate - 2.0 * accel * gap)) / -accel;
+}
 
 /// The first s ≥ 0 at which two spheres, centres dx = x_i − x_j apart moving with
 /// dv = v_i − v_j, come within `contact_distance_m`; 0 if they already overlap and
 /// approach; `never` if they do not meet.
-double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m);
+///
+/// Free of branches: whether a neighbour approaches is a coin toss, and mispredicted
+/// branches cost more than always taking the square root and the quotient.
+inline double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m) {
+  const double b = dx.dot(dv);
+  const double c = dx.squaredNorm() - contact_distance_m * contact_distance_m;
+  const double discriminant = b * b - dv.squaredNorm() * c;
+  const double root = c / (std::sqrt(discriminant) - b);  // NaN if they miss: discarded below
+  const double meeting = discriminant < 0 ? never : root;
+  const double unless_overlapping = c <= 0 ? 0.0 : meeting;
+  return b >= -min_approach_speed_m_s * contact_distance_m ? never : unless_overlapping;
+}
 
 /// A closing rate for `earliest_contact` that makes it report the first time the gap is
 /// within the tolerance, closing or not: the question a margin asks.

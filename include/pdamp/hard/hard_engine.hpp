@@ -78,6 +78,13 @@ class HardEngine final : public Engine {
   /// Lab-frame position of any sphere now (free or riding).
   Eigen::Vector3d position_now(int i, const HostState& host) const;
   void bring_to_now(int i);
+  /// host_.at(t_s_), which every prediction needs: the two of a collision share it.
+  HostState host_now() const;
+  /// Sphere i's trajectory changed: every event predicted for it is out of date.
+  void new_trajectory(int i) {
+    ++counter_[i];
+    queue_.forget(i);
+  }
   double host_inverse_mass_1_kg() const;
   /// The law of a collision of i with j (−1 for a wall or rider) at this approach speed:
   /// calibrated e_n and β0 if any, and e_n = 1 for slow first collisions (see
@@ -110,6 +117,8 @@ class HardEngine final : public Engine {
   void collide_rider(int i, int j);
   void turn_along_side_wall(int i, const Eigen::Vector3d& outward);
   void cross_face(int i, Face face);
+  /// Puts free sphere i into cell c (it must be in none).
+  void enter_cell(int i, const CellCoord& c);
   void release_bed();
 
   // The host and the bed.
@@ -138,6 +147,13 @@ class HardEngine final : public Engine {
   std::vector<double> t_ref_s_;
   std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
+  /// The cells around each free sphere's cell (itself included), kept because every
+  /// prediction needs them and working them out costs two integer divisions per cell.
+  struct Around {
+    std::array<int, 27> cells;
+    int count;
+  };
+  std::vector<Around> around_;
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
   std::vector<double> last_collision_s_;
@@ -164,6 +180,7 @@ class HardEngine final : public Engine {
   CellMembers free_cells_;   ///< free spheres by lab cell
   CellMembers rider_cells_;  ///< riding spheres by host-frame cell
   EventQueue queue_;
+  std::vector<int> neighbours_;  ///< predict's scratch: the free spheres around the one predicted
   double contact_tolerance_m_;
   double max_radius_m_;
   double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart
@@ -172,7 +189,13 @@ class HardEngine final : public Engine {
 
   // Host.
   HostTrajectory host_;
-  std::uint32_t host_epoch_ = 0;
+  std::uint32_t host_epoch_ = 0;  ///< bumped whenever host_ is replaced
+  struct HostNow {
+    double t_s;
+    std::uint32_t epoch;
+    HostState state;
+  };
+  mutable HostNow host_now_{-never, 0, {}};  ///< host_now()'s last answer
   double host_speed_envelope_m_s_ = 0.0;  ///< ≥ the speed bound of every trajectory since the last rebuild
   double trajectory_riding_mass_kg_ = 0.0;  ///< the riding mass host_ was built with
   double t_s_ = 0.0;

@@ -207,7 +207,11 @@ Process start_endless_run(const test::TempDir& dir, const std::filesystem::path&
             dir);
   for (int i = 0; i < 200; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    if (std::filesystem::exists(db) && count_rows(db, "SELECT count(*) FROM samples") > 1000) break;
+    // The file appears before its schema does: wait for the samples table, then for samples.
+    if (!std::filesystem::exists(db) || count_rows(db, "SELECT count(*) FROM sqlite_master WHERE name = 'samples'") == 0) {
+      continue;
+    }
+    if (count_rows(db, "SELECT count(*) FROM samples") > 1000) break;
   }
   return p;
 }

@@ -333,3 +333,60 @@ TEST_CASE("a host impulse cannot drive a cap into a sphere that touches it while
   }
   CHECK(statistic(engine, "events_cap") >= 2);  // B on the top cap, then the floor catches A
 }
+
+TEST_CASE("jam: a heavy sphere driven into a touching cluster in flight merges the wedged spheres instead of colliding without end") {
+  // 54 touching spheres (the sites of a face-centred cubic packing nearest its centre),
+  // spinning at ~3000 rad/s, and a 1000 times heavier sphere driven into them at 3 m/s,
+  // like a cap into a dense bed: the pairwise collisions through the touching cluster
+  // converge ever more slowly (300 000 of them before the jam rule); jammed spheres merge
+  // into a rigid body instead. No gravity, walls out of reach.
+  const Scenario s = fixed_walls("[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.05\nheight_m = 0.05\n"
+                                 "[particles]\ncount = 55\ndiameter_m = 0.0012\n[hard]\nen = 0.154\nmu = 0.55\nbeta0 = 0.35\n");
+  const int n = 55;
+  const double r = 0.0006;
+  std::vector<Eigen::Vector3d> sites;
+  const double edge = 2 * r * std::sqrt(2.0);
+  for (int x = -3; x <= 3; ++x) {
+    for (int y = -3; y <= 3; ++y) {
+      for (int z = -3; z <= 3; ++z) {
+        for (const Eigen::Vector3d& o : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.5, 0.5, 0),
+                                         Eigen::Vector3d(0.5, 0, 0.5), Eigen::Vector3d(0, 0.5, 0.5)}) {
+          sites.push_back(edge * (Eigen::Vector3d(x, y, z) + o));
+        }
+      }
+    }
+  }
+  std::stable_sort(sites.begin(), sites.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return a.norm() < b.norm() - 1e-12;
+  });
+  Particles p(n);
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> normal;
+  for (int i = 0; i < n; ++i) {
+    p.radius_m[i] = r;
+    p.mass_kg[i] = 3.5e-6;
+    p.position_m.col(i) = sites[i] + Eigen::Vector3d(0, 0, 0.025);
+    p.velocity_m_s.col(i) = 0.003 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    p.angular_velocity_rad_s.col(i) = 3000.0 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  }
+  p.mass_kg[n - 1] *= 1000.0;
+  p.velocity_m_s.col(n - 1) = -3.0 * sites[n - 1].normalized();
+  HardEngine engine(s, p);
+  auto momentum = [&] {
+    const Particles q = engine.state().particles;
+    Eigen::Vector3d total = Eigen::Vector3d::Zero();
+    for (int i = 0; i < n; ++i) total += q.mass_kg[i] * q.velocity_m_s.col(i);
+    return total;
+  };
+  const Eigen::Vector3d p0 = momentum();
+  const double e0 = engine.observe().energy.stored_J();
+  for (int k = 1; k <= 10; ++k) {
+    engine.advance_to(1e-5 * k);
+    CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+  }
+  CHECK(statistic(engine, "events_sphere_sphere") < 30000);
+  CHECK(statistic(engine, "jam_merges") > 0);
+  CHECK((momentum() - p0).norm() <= 1e-13 * p0.norm());
+  CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
+  CHECK(engine.observe().energy.dissipated_friction_J > 0);
+}

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <sstream>
 
@@ -22,7 +23,8 @@ constexpr double relative_contact_tolerance = 1e-10;
 /// landing bed close in at ~1 cm/s, one host impulse per µs: each tier holds ~50 times
 /// fewer spheres than the one outside it.
 constexpr std::array<double, 3> margin_fractions{0.1, 0.002, 4e-5};
-/// A sphere that collides with riders this many times at one instant is jammed among them.
+/// A sphere that collides with riders, or with free spheres, this many times at one
+/// instant is jammed among them.
 constexpr int jam_repeats = 64;
 
 const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
@@ -54,6 +56,8 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       last_collision_s_(initial.size(), -never),
       repeats_at_this_instant_(initial.size(), 0),
       riding_(initial.size(), 0),
+      jam_{-1.0, std::vector<int>(initial.size(), 0), std::vector<std::vector<int>>(initial.size()), {}},
+      in_jam_(initial.size(), 0),
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
@@ -203,6 +207,8 @@ EngineStatistics HardEngine::statistics() const {
           {"bed_knock_offs", stats_.knocked_off},
           {"bed_releases", stats_.bed_releases},
           {"bed_jammed", stats_.jammed},
+          {"jam_merges", stats_.jam_merges},
+          {"jam_merged_spheres", stats_.jam_merged_spheres},
           {"host_impulses", stats_.host_impulses},
           {"near_sweeps", tiers_[0].sweeps},
           {"near_repredictions", tiers_[0].repredictions},
@@ -530,6 +536,10 @@ HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, 
 void HardEngine::collide_spheres(int i, int j) {
   bring_to_now(i);
   bring_to_now(j);
+  if (note_jam(i, j)) {
+    merge_jam(i);
+    return;
+  }
   const double ri = particles_.radius_m[i], rj = particles_.radius_m[j];
   const Eigen::Vector3d n = (particles_.position_m.col(j) - particles_.position_m.col(i)).normalized();
   const Eigen::Vector3d dv = particles_.velocity_m_s.col(i) - particles_.velocity_m_s.col(j);
@@ -552,6 +562,102 @@ void HardEngine::collide_spheres(int i, int j) {
   new_trajectory(j);
   predict(i);
   predict(j);
+}
+
+bool HardEngine::note_jam(int i, int j) {
+  if (jam_.t_s != t_s_) {
+    for (const int k : jam_.involved) {
+      jam_.count[k] = 0;
+      jam_.partners[k].clear();
+    }
+    jam_.involved.clear();
+    jam_.t_s = t_s_;
+  }
+  for (const int k : {i, j}) {
+    if (jam_.count[k]++ == 0) jam_.involved.push_back(k);
+  }
+  std::vector<int>& of_i = jam_.partners[i];
+  if (std::find(of_i.begin(), of_i.end(), j) == of_i.end()) {
+    of_i.push_back(j);
+    jam_.partners[j].push_back(i);
+  }
+  return jam_.count[i] > jam_repeats || jam_.count[j] > jam_repeats;
+}
+
+void HardEngine::merge_jam(int i) {
+  // Touching spheres that keep colliding at one instant are the hard-sphere limit of a
+  // jam: inelastic collapse drives their approach speeds to zero in infinitely many
+  // collisions, and friction in a wedge can turn slip at one contact into approach at
+  // the next for ever. Its limit is taken at once: the cluster (free spheres linked by
+  // collisions at this instant, all touching since time has not moved) moves on as one
+  // rigid body with the same momentum and angular momentum. A rigid motion flown
+  // ballistically never brings two of its spheres closer, so no collision among them is
+  // left; the energy of the relative motion removed is the loss (≥ 0: the rigid motion
+  // is the kinetic-energy projection of the old one).
+  std::vector<int> members{i};
+  std::vector<std::uint8_t>& in = in_jam_;
+  in[i] = 1;
+  for (std::size_t k = 0; k < members.size(); ++k) {
+    for (const int j : jam_.partners[members[k]]) {
+      if (in[j] || riding_[j]) continue;
+      in[j] = 1;
+      members.push_back(j);
+    }
+  }
+  std::sort(members.begin(), members.end());
+  double mass = 0.0;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero(), momentum = Eigen::Vector3d::Zero();
+  for (const int k : members) {
+    bring_to_now(k);
+    const double m = particles_.mass_kg[k];
+    mass += m;
+    centre += m * particles_.position_m.col(k);
+    momentum += m * particles_.velocity_m_s.col(k);
+  }
+  centre /= mass;
+  const Eigen::Vector3d velocity = momentum / mass;
+  Eigen::Vector3d angular_momentum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+  for (const int k : members) {
+    const double m = particles_.mass_kg[k], moment = particles_.moment_of_inertia(k);
+    const Eigen::Vector3d r = particles_.position_m.col(k) - centre;
+    angular_momentum += m * r.cross(particles_.velocity_m_s.col(k) - velocity) + moment * particles_.angular_velocity_rad_s.col(k);
+    inertia += (moment + m * r.squaredNorm()) * Eigen::Matrix3d::Identity() - m * r * r.transpose();
+  }
+  const Eigen::Vector3d spin = inertia.llt().solve(angular_momentum);
+  // The loss is split as the contacts' relative motion was: its normal part is impact,
+  // its sliding and rolling part friction.
+  double normal = 0.0, total = 0.0;
+  for (const int k : members) {
+    for (const int j : jam_.partners[k]) {
+      if (j < k || !in[j]) continue;
+      const Eigen::Vector3d n = (particles_.position_m.col(j) - particles_.position_m.col(k)).normalized();
+      const Eigen::Vector3d u = particles_.velocity_m_s.col(k) - particles_.velocity_m_s.col(j) +
+                                (particles_.radius_m[k] * particles_.angular_velocity_rad_s.col(k) +
+                                 particles_.radius_m[j] * particles_.angular_velocity_rad_s.col(j)).cross(n);
+      const double reduced = particles_.mass_kg[k] * particles_.mass_kg[j] / (particles_.mass_kg[k] + particles_.mass_kg[j]);
+      normal += reduced * u.dot(n) * u.dot(n);
+      total += reduced * u.squaredNorm();
+    }
+  }
+  double loss = 0.0;
+  for (const int k : members) {
+    const Eigen::Vector3d v = velocity + spin.cross(particles_.position_m.col(k) - centre);
+    loss += 0.5 * particles_.mass_kg[k] * (particles_.velocity_m_s.col(k) - v).squaredNorm() +
+            0.5 * particles_.moment_of_inertia(k) * (particles_.angular_velocity_rad_s.col(k) - spin).squaredNorm();
+    particles_.velocity_m_s.col(k) = v;
+    particles_.angular_velocity_rad_s.col(k) = spin;
+    ++counter_[k];
+  }
+  const double impact_share = total > 0.0 ? normal / total : 1.0;
+  impact_J_ += impact_share * loss;
+  friction_J_ += (1.0 - impact_share) * loss;
+  ++stats_.jam_merges;
+  stats_.jam_merged_spheres += static_cast<std::int64_t>(members.size());
+  for (const int k : members) {
+    in[k] = 0;
+    predict(k);
+  }
 }
 
 double HardEngine::host_inverse_mass_1_kg() const {

@@ -113,6 +113,12 @@ class HardEngine final : public Engine {
   // Events.
   void handle(const Event& event);
   void collide_spheres(int i, int j);
+  /// Records a collision of free spheres i and j at this instant; true once either has
+  /// collided jam_repeats times at it (the two are wedged in a jammed cluster).
+  bool note_jam(int i, int j);
+  /// The jammed cluster of i (free spheres linked by collisions at this instant) stops
+  /// all relative motion: a perfectly inelastic, sticking merge into a rigid body.
+  void merge_jam(int i);
   void collide_wall(int i, EventKind wall);
   void collide_rider(int i, int j);
   void turn_along_side_wall(int i, const Eigen::Vector3d& outward);
@@ -159,6 +165,14 @@ class HardEngine final : public Engine {
   std::vector<double> last_collision_s_;
   std::vector<int> repeats_at_this_instant_;  ///< collisions of each sphere at last_collision_s_, less one
   std::vector<std::uint8_t> riding_;
+  /// Collisions between free spheres at the instant t_s: per sphere how many, and with whom.
+  struct Jam {
+    double t_s = -1.0;
+    std::vector<int> count;
+    std::vector<std::vector<int>> partners;
+    std::vector<int> involved;  ///< spheres with a count, to reset them when time moves on
+  } jam_;
+  std::vector<std::uint8_t> in_jam_;  ///< scratch for merge_jam
   /// Spheres whose host-dependent events are lower bounds, valid while the host strays
   /// less than `margin_m` from the trajectory they were computed with.
   struct MarginTier {
@@ -211,6 +225,7 @@ class HardEngine final : public Engine {
   struct Statistics {
     std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
                  host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, jammed = 0, host_impulses = 0,
+                 jam_merges = 0, jam_merged_spheres = 0,
                  touching_repredictions = 0, rebuilds = 0;
   } stats_;
 };

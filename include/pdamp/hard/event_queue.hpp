@@ -4,7 +4,8 @@
 /// Predictions go out of date all the time (a collision voids every event of its two
 /// spheres), and most events never happen. So events are kept per owner (the sphere an
 /// event was predicted for; one more owner for the host's events) in a small unsorted
-/// list, and a 4-ary heap orders only the owners, by their earliest event. Then
+/// list, and a Boost.Heap (a mutable 4-ary `d_ary_heap`, one handle per owner) orders only
+/// the owners, by their earliest event. Then
 /// - when a sphere's trajectory changes, its own events are forgotten at once
 ///   (`forget`), without touching the heap until the next look at the top;
 /// - an owner's list is pruned of out-of-date events whenever it is re-keyed, so an
@@ -14,8 +15,9 @@
 /// of date after its owner was last re-keyed still reaches the top and is dropped there
 /// (`HardEngine::is_current`).
 
+#include <boost/heap/d_ary_heap.hpp>
 #include <cstdint>
-#include <limits>
+#include <optional>
 #include <vector>
 
 namespace pdamp::hard {
@@ -54,7 +56,7 @@ class EventQueue {
  public:
   /// Owners 0 … particle_count − 1 are the spheres; events with i < 0 belong to the host.
   explicit EventQueue(int particle_count)
-      : lists_(particle_count + 1), slot_(particle_count + 1, absent), dirty_flag_(particle_count + 1, 0) {}
+      : lists_(particle_count + 1), handle_(particle_count + 1), dirty_flag_(particle_count + 1, 0) {}
 
   void push(const Event& event) {
     const int owner = owner_of(event);
@@ -70,7 +72,7 @@ class EventQueue {
     for (auto& list : lists_) list.clear();
     for (const int owner : dirty_) dirty_flag_[owner] = 0;
     dirty_.clear();
-    for (const Entry& e : heap_) slot_[owner_of(e.event)] = absent;
+    for (const Entry& e : heap_) handle_[owner_of(e.event)].reset();
     heap_.clear();
   }
 
@@ -80,24 +82,32 @@ class EventQueue {
   const Event* top(Current current) {
     for (const int owner : dirty_) rekey(owner, current);
     dirty_.clear();
-    return heap_.empty() ? nullptr : &heap_.front().event;
+    return heap_.empty() ? nullptr : &heap_.top().event;
   }
   /// Removes the event `top` returned.
   void pop() {
-    const int owner = owner_of(heap_.front().event);
+    const Entry& entry = heap_.top();
+    const int owner = owner_of(entry.event);
     std::vector<Event>& list = lists_[owner];
-    list[heap_.front().index] = list.back();
+    list[entry.index] = list.back();
     list.pop_back();
     mark_dirty(owner);
   }
 
  private:
   struct Entry {
-    Event event;  ///< the owner's earliest event (a copy, so that sifting stays in the heap's memory)
+    Event event;          ///< the owner's earliest event (a copy, so that the heap compares entries alone)
     std::uint32_t index;  ///< its position in the owner's list
   };
-  static constexpr int arity = 4;
-  static constexpr std::uint32_t absent = std::numeric_limits<std::uint32_t>::max();
+  /// Boost.Heap puts the greatest element on top; here that is the earliest event.
+  struct Later {
+    bool operator()(const Entry& a, const Entry& b) const { return earlier(b.event, a.event); }
+  };
+  /// Mutable, for re-keying an owner in place. Measured on pdamp_bench (N = 1,000): as fast
+  /// as arities 2 and 8 and the hand-written 4-ary heap it replaced (within ~3 %);
+  /// pairing, Fibonacci and skew heaps were 10–20 % slower.
+  using Heap = boost::heap::d_ary_heap<Entry, boost::heap::arity<4>, boost::heap::mutable_<true>,
+                                       boost::heap::compare<Later>>;
 
   int owner_of(const Event& e) const { return e.i >= 0 ? e.i : static_cast<int>(lists_.size()) - 1; }
   void mark_dirty(int owner) {
@@ -119,68 +129,24 @@ class EventQueue {
       if (k > 0 && earlier(list[k], list[best])) best = k;
       ++k;
     }
-    const std::uint32_t slot = slot_[owner];
+    std::optional<Heap::handle_type>& handle = handle_[owner];
     if (list.empty()) {
-      if (slot != absent) erase(slot);
+      if (handle) heap_.erase(*handle);
+      handle.reset();
       return;
     }
     const Entry entry{list[best], static_cast<std::uint32_t>(best)};
-    if (slot == absent) {
-      heap_.push_back(entry);
-      sift_up(static_cast<std::uint32_t>(heap_.size() - 1), entry);
-    } else if (earlier(entry.event, heap_[slot].event)) {
-      sift_up(slot, entry);
+    if (handle) {
+      heap_.update(*handle, entry);
     } else {
-      sift_down(slot, entry);
+      handle = heap_.push(entry);
     }
-  }
-  void erase(std::uint32_t slot) {
-    slot_[owner_of(heap_[slot].event)] = absent;
-    const Entry last = heap_.back();
-    heap_.pop_back();
-    if (slot == heap_.size()) return;
-    if (earlier(last.event, heap_[slot].event)) {
-      sift_up(slot, last);
-    } else {
-      sift_down(slot, last);
-    }
-  }
-  /// Puts `entry` at `slot` or above it, moving later parents down.
-  void sift_up(std::uint32_t slot, const Entry& entry) {
-    while (slot > 0) {
-      const std::uint32_t parent = (slot - 1) / arity;
-      if (!earlier(entry.event, heap_[parent].event)) break;
-      place(slot, heap_[parent]);
-      slot = parent;
-    }
-    place(slot, entry);
-  }
-  /// Puts `entry` at `slot` or below it, moving earlier children up.
-  void sift_down(std::uint32_t slot, const Entry& entry) {
-    const auto size = static_cast<std::uint32_t>(heap_.size());
-    for (;;) {
-      const std::uint32_t first = arity * slot + 1;
-      if (first >= size) break;
-      const std::uint32_t end = first + arity < size ? first + arity : size;
-      std::uint32_t child = first;
-      for (std::uint32_t c = first + 1; c < end; ++c) {
-        if (earlier(heap_[c].event, heap_[child].event)) child = c;
-      }
-      if (!earlier(heap_[child].event, entry.event)) break;
-      place(slot, heap_[child]);
-      slot = child;
-    }
-    place(slot, entry);
-  }
-  void place(std::uint32_t slot, const Entry& entry) {
-    heap_[slot] = entry;
-    slot_[owner_of(entry.event)] = slot;
   }
 
-  std::vector<std::vector<Event>> lists_;  ///< each owner's events, unsorted
-  std::vector<Entry> heap_;                ///< owners with events, by their earliest
-  std::vector<std::uint32_t> slot_;        ///< each owner's place in heap_, or absent
-  std::vector<int> dirty_;                 ///< owners whose events changed since the last top()
+  std::vector<std::vector<Event>> lists_;                 ///< each owner's events, unsorted
+  Heap heap_;                                             ///< owners with events, by their earliest
+  std::vector<std::optional<Heap::handle_type>> handle_;  ///< each owner's entry in heap_, if it has one
+  std::vector<int> dirty_;                                ///< owners whose events changed since the last top()
   std::vector<std::uint8_t> dirty_flag_;
 };
 

@@ -45,13 +45,13 @@ void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const
   history_.swap(next_history_);
   touching_.swap(next_touching_);
 
-  // The transposed list, by a counting sort on the partners (stable: pairs ascending).
+  // The slots by partner, by a counting sort on the partners (stable: pairs ascending).
   reverse_first_.assign(n + 1, 0);
   for (const int j : partner_) ++reverse_first_[j + 1];
   for (int j = 0; j < n; ++j) reverse_first_[j + 1] += reverse_first_[j];
-  reverse_pair_.resize(partner_.size());
+  partner_slot_.resize(partner_.size());
   old_slot_.assign(reverse_first_.begin(), reverse_first_.end() - 1);  // reused as fill cursors
-  for (int k = 0; k < static_cast<int>(partner_.size()); ++k) reverse_pair_[old_slot_[partner_[k]]++] = k;
+  for (int k = 0; k < static_cast<int>(partner_.size()); ++k) partner_slot_[k] = old_slot_[partner_[k]]++;
   ++rebuilds_;
 }
 

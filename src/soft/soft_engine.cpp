@@ -146,6 +146,8 @@ void SoftEngine::refresh_neighbours() {
   if (!needs_rebuild_) return;
   needs_rebuild_ = false;
   neighbours_.rebuild(x_, radius_);
+  // Freed before it grows, so that the old and new buffers are not held at once.
+  if (reactions_.capacity() < static_cast<std::size_t>(neighbours_.size())) reactions_ = {};
   reactions_.assign(neighbours_.size(), Wrench{});
   x_at_rebuild_ = x_;
   host_z_at_rebuild_ = host_.z_m;

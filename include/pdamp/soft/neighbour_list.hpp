@@ -46,10 +46,15 @@ class NeighbourList {
   std::vector<int> first_, partner_;
   std::vector<ContactHistory> history_;
   std::vector<unsigned char> touching_;
-  std::vector<int> next_first_, next_partner_;
-  std::vector<ContactHistory> next_history_;
-  std::vector<unsigned char> next_touching_;
-  std::vector<int> old_slot_;  ///< during a rebuild: where partner j of the current i was listed, or −1
+  /// During a rebuild: the touching pairs' histories, by owner ([kept_first_[i],
+  /// kept_first_[i + 1]) for particle i), and where partner j of the current i is kept, or −1.
+  struct KeptHistory {
+    int partner;
+    ContactHistory history;
+  };
+  std::vector<KeptHistory> kept_;
+  std::vector<int> kept_first_;
+  std::vector<int> old_slot_;
   std::vector<int> reverse_first_, partner_slot_;
   long long rebuilds_ = 0;
 };

@@ -152,6 +152,9 @@ void SoftEngine::refresh_neighbours() {
   if (!needs_rebuild_) return;
   needs_rebuild_ = false;
   neighbours_.rebuild(x_, radius_);
+  // Freed before it grows, so that the old and new buffers are not held at once.
+  if (reactions_.capacity() < static_cast<std::size_t>(neighbours_.size())) reactions_ = {};
+  reactions_.assign(neighbours_.size(), Wrench{});
   x_at_rebuild_ = x_;
   host_z_at_rebuild_ = host_.z_m;
 }
@@ -161,7 +164,6 @@ void SoftEngine::compute_forces(double dt_s) {
   // reactions on partners are set aside) and its walls. The reactions are then gathered
   // per sphere, and the chunks' totals added in chunk order — so the result is the same
   // bits whatever the number of threads.
-  reactions_.resize(neighbours_.size());
   const int n = static_cast<int>(x_.size());
   const int chunks = (n + chunk_size - 1) / chunk_size;
   chunk_totals_.resize(chunks);
@@ -169,9 +171,11 @@ void SoftEngine::compute_forces(double dt_s) {
   for (int c = 0; c < chunks; ++c) {
     ChunkTotals totals;
     for (int i = c * chunk_size; i < std::min(n, (c + 1) * chunk_size); ++i) {
-      start_forces(i);
-      add_particle_contacts(i, dt_s, totals);
-      add_wall_contacts(i, dt_s, totals);
+      Wrench on_i = start_forces(i);
+      add_particle_contacts(i, dt_s, totals, on_i);
+      add_wall_contacts(i, dt_s, totals, on_i);
+      force_[i] = on_i.force_N;
+      torque_[i] = on_i.torque_N_m;
     }
     chunk_totals_[c] = totals;
   }
@@ -195,10 +199,9 @@ void SoftEngine::compute_forces(double dt_s) {
   add_host_forces();
 }
 
-void SoftEngine::start_forces(int i) {
+SoftEngine::Wrench SoftEngine::start_forces(int i) const {
   const double drag = options_.settling_drag_1_s;
-  force_[i] = mass_[i] * (scenario_.gravity_m_s2 - drag * v_[i]);
-  torque_[i] = -drag / inv_inertia_[i] * w_[i];
+  return {mass_[i] * (scenario_.gravity_m_s2 - drag * v_[i]), -drag / inv_inertia_[i] * w_[i]};
 }
 
 void SoftEngine::ChunkTotals::record_contact(double overlap_m, double radius_m) {
@@ -206,7 +209,7 @@ void SoftEngine::ChunkTotals::record_contact(double overlap_m, double radius_m) 
   max_overlap_ratio = std::max(max_overlap_ratio, overlap_m / radius_m);
 }
 
-void SoftEngine::add_particle_contacts(int i, double dt_s, ChunkTotals& totals) {
+void SoftEngine::add_particle_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i) {
   const SoftContactLaw& law = scenario_.soft_particle;
   const Eigen::Vector3d xi = x_[i];
   const double ri = radius_[i];
@@ -225,9 +228,9 @@ void SoftEngine::add_particle_contacts(int i, double dt_s, ChunkTotals& totals) 
                                     v_[i] - v_[j] - (lever_i * w_[i] + lever_j * w_[j]).cross(normal)};
     const ContactForce c = evaluate_contact(law, contact, dt_s, neighbours_.history(k));
     const Eigen::Vector3d twist = normal.cross(c.tangential_N);
-    force_[i] += c.force_N;
-    torque_[i] -= lever_i * twist;
-    reactions_[k] = {-c.force_N, -lever_j * twist};
+    on_i.force_N += c.force_N;
+    on_i.torque_N_m -= lever_i * twist;
+    reactions_[neighbours_.partner_slot(k)] = {-c.force_N, -lever_j * twist};
     totals.impact_J += c.dissipated_normal_J;
     totals.friction_J += c.dissipated_tangential_J;
     totals.elastic_J += c.elastic_J;
@@ -238,15 +241,17 @@ void SoftEngine::add_particle_contacts(int i, double dt_s, ChunkTotals& totals) 
 }
 
 void SoftEngine::add_reactions(int j) {
+  // Summed in a local: stores into force_ would make the compiler reload every operand.
+  Wrench on_j{force_[j], torque_[j]};
   for (int r = neighbours_.partner_first(j); r < neighbours_.partner_first(j + 1); ++r) {
-    const int k = neighbours_.reverse_pair(r);
-    if (!neighbours_.touching(k)) continue;  // apart: no force this step
-    force_[j] += reactions_[k].force_N;
-    torque_[j] += reactions_[k].torque_N_m;
+    on_j.force_N += reactions_[r].force_N;
+    on_j.torque_N_m += reactions_[r].torque_N_m;
   }
+  force_[j] = on_j.force_N;
+  torque_[j] = on_j.torque_N_m;
 }
 
-void SoftEngine::add_wall_contacts(int i, double dt_s, ChunkTotals& totals) {
+void SoftEngine::add_wall_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i) {
   const SoftContactLaw& law = scenario_.soft_wall;
   const double r = radius_[i];
   const double rho_sq = x_[i].x() * x_[i].x() + x_[i].y() * x_[i].y();
@@ -260,8 +265,8 @@ void SoftEngine::add_wall_contacts(int i, double dt_s, ChunkTotals& totals) {
     const double lever = r + std::min(gap.gap_m, 0.0);  // the contact point is on the wall
     const ContactKinematics contact{gap.normal, -gap.gap_m, v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity};
     const ContactForce c = evaluate_contact(law, contact, dt_s, wall_history_[wall][i]);
-    force_[i] += c.force_N;
-    torque_[i] -= lever * gap.normal.cross(c.tangential_N);
+    on_i.force_N += c.force_N;
+    on_i.torque_N_m -= lever * gap.normal.cross(c.tangential_N);
     totals.on_host_N -= c.force_N.z();
     totals.impact_J += c.dissipated_normal_J;
     totals.friction_J += c.dissipated_tangential_J;

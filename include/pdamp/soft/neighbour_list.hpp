@@ -26,10 +26,12 @@ class NeighbourList {
   /// Pairs of particle i are [first(i), first(i + 1)).
   int first(int i) const { return first_[i]; }
   int partner(int k) const { return partner_[k]; }
-  /// The pairs in which particle j is the partner: pair(r) for r in
-  /// [partner_first(j), partner_first(j + 1)), in ascending pair order.
+  /// The pairs grouped by partner: those in which particle j is the partner take the
+  /// slots [partner_first(j), partner_first(j + 1)), in ascending pair order; pair k takes
+  /// slot partner_slot(k). (A per-pair quantity stored by slot is gathered per partner
+  /// from contiguous memory.)
   int partner_first(int j) const { return reverse_first_[j]; }
-  int reverse_pair(int r) const { return reverse_pair_[r]; }
+  int partner_slot(int k) const { return partner_slot_[k]; }
   ContactHistory& history(int k) { return history_[k]; }
   /// Whether pair k was touching after the last force computation.
   bool touching(int k) const { return touching_[k] != 0; }
@@ -44,11 +46,16 @@ class NeighbourList {
   std::vector<int> first_, partner_;
   std::vector<ContactHistory> history_;
   std::vector<unsigned char> touching_;
-  std::vector<int> next_first_, next_partner_;
-  std::vector<ContactHistory> next_history_;
-  std::vector<unsigned char> next_touching_;
-  std::vector<int> old_slot_;  ///< during a rebuild: where partner j of the current i was listed, or −1
-  std::vector<int> reverse_first_, reverse_pair_;
+  /// During a rebuild: the touching pairs' histories, by owner ([kept_first_[i],
+  /// kept_first_[i + 1]) for particle i), and where partner j of the current i is kept, or −1.
+  struct KeptHistory {
+    int partner;
+    ContactHistory history;
+  };
+  std::vector<KeptHistory> kept_;
+  std::vector<int> kept_first_;
+  std::vector<int> old_slot_;
+  std::vector<int> reverse_first_, partner_slot_;
   long long rebuilds_ = 0;
 };
 

@@ -62,9 +62,16 @@ class SoftEngine final : public Engine {
   static constexpr int chunk_size = 64;
   /// Below this many spheres a step is too short to share between threads.
   static constexpr int parallel_minimum = 512;
-  void start_forces(int i);
-  void add_particle_contacts(int i, double dt_s, ChunkTotals& totals);
-  void add_wall_contacts(int i, double dt_s, ChunkTotals& totals);
+  /// Force and torque on one body.
+  struct Wrench {
+    Eigen::Vector3d force_N = Eigen::Vector3d::Zero(), torque_N_m = Eigen::Vector3d::Zero();
+  };
+  // Inlined into the force pass so that a sphere's wrench and the chunk's totals stay in
+  // registers: the pass's stores (histories, reactions) might otherwise alias them and force
+  // a store and reload per contact.
+  [[gnu::always_inline]] inline Wrench start_forces(int i) const;
+  [[gnu::always_inline]] inline void add_particle_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i);
+  [[gnu::always_inline]] inline void add_wall_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i);
   void add_reactions(int j);
 
   Scenario scenario_;
@@ -80,11 +87,12 @@ class SoftEngine final : public Engine {
   std::vector<Eigen::Vector3d> x_, v_, w_, force_, torque_;
   std::vector<double> radius_, mass_, inv_mass_, inv_inertia_;
   NeighbourList neighbours_;
-  /// The force and torque each pair's contact puts on its partner, gathered after the pairs.
-  struct Reaction {
-    Eigen::Vector3d force_N, torque_N_m;
-  };
-  std::vector<Reaction> reactions_;
+  /// The force and torque each pair's contact puts on its partner, stored by the pair's
+  /// partner slot and gathered after the pairs. A pair's entry is written whenever its
+  /// contact is evaluated, which includes the step it comes apart (a zero reaction), and
+  /// zeroed at each rebuild: so the entries of pairs not evaluated are zero, and the
+  /// gather adds every slot without asking which pairs touch.
+  std::vector<Wrench> reactions_;
   std::vector<ChunkTotals> chunk_totals_;
   std::vector<Eigen::Vector3d> x_at_rebuild_;
   bool needs_rebuild_ = true;

@@ -60,7 +60,15 @@ class Collision {
     const double dt = engine.time_step_s();
     bool touched = false;
     for (double t = dt; t < 50.0 * contact_time_s_ + 100.0 * dt; t += dt) {
-      engine.advance_to(t);
+      try {
+        engine.advance_to(t);
+      } catch (const RuntimeFailure& e) {
+        // The soft law has no restitution to give at this speed (e.g. it cannot stop the impact).
+        throw RuntimeFailure("calibrating the hard model's restitution from the soft law, an isolated " +
+                             std::string(wall_ ? "sphere-wall" : "sphere-sphere") + " impact at " +
+                             std::to_string(normal_speed_) + " m/s failed: " + e.what() +
+                             "; use [hard] restitution = constant for this scenario");
+      }
       const bool touching = engine.observe().counters.contacts > 0;
       touched |= touching;
       if (touched && !touching) {

@@ -50,18 +50,6 @@ const RestitutionTable& lead_calibration() {
   return table;
 }
 
-Particles spheres(const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& velocities) {
-  Particles p(static_cast<Eigen::Index>(positions.size()));
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    const auto k = static_cast<Eigen::Index>(i);
-    p.position_m.col(k) = positions[i];
-    p.velocity_m_s.col(k) = velocities[i];
-    p.radius_m[k] = radius_m;
-    p.mass_kg[k] = lead_kg_m3 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius_m, 3);
-  }
-  return p;
-}
-
 /// How far linear interpolation in log(speed) can be from the curve between table points:
 /// an eighth of the largest second difference of e_n over the table.
 double interpolation_error(const RestitutionCurve& curve) {
@@ -84,7 +72,7 @@ TEST_CASE_TEMPLATE("a sphere dropped on a fixed floor: bounce heights and time t
   const Scenario s = fixed_walls("[particles]\ncount = 1\n");
   const RestitutionCurve& wall = lead_calibration().sphere_wall;
   const double g = 9.81, drop_m = 0.005;
-  const Particles ball = spheres({{0.001, 0, radius_m + drop_m}}, {{0, 0, 0}});
+  const Particles ball = test::spheres({{0.001, 0, radius_m + drop_m}}, {{0, 0, 0}}, radius_m, lead_kg_m3);
   const double m = ball.mass_kg[0];
 
   // The bounces the table predicts: impact speeds v_k, apex heights, and each bounce's
@@ -148,7 +136,8 @@ PairOutcome collide(Model model, const Eigen::Vector3d& relative_velocity) {
   // Sphere 1 sits 1 nm beyond contact along x (so that the line of centres has not turned
   // when they touch); they approach with the given relative velocity.
   const Eigen::Vector3d centre(0, 0, 0.01), gap(2 * radius_m + 1e-9, 0, 0);
-  const Particles pair = spheres({centre, centre + gap}, {0.5 * relative_velocity, -0.5 * relative_velocity});
+  const Particles pair =
+      test::spheres({centre, centre + gap}, {0.5 * relative_velocity, -0.5 * relative_velocity}, radius_m, lead_kg_m3);
   auto engine = make_engine(model, s, pair, &lead_calibration());
   engine->advance_to(0.002);  // a few microseconds of contact; 1 mm of flight after it
   const Particles p = engine->state().particles;
@@ -211,11 +200,7 @@ TEST_CASE_TEMPLATE("a sphere on a harmonically forced floor: the momentum it exc
       "[host]\nmass_kg = 0.001\nstiffness_N_m = 1e-15\ndamping_N_s_m = 0\nz0_m = 0\n"
       "[excitation]\nmode = force\nforce_N = 0.02943\nfrequency_hz = 30\n"
       "[cavity]\ndiameter_m = 0.01\nheight_m = 0.006\n[particles]\ncount = 1\ndiameter_m = 0.003\ndensity_kg_m3 = 9000\n");
-  Particles ball(1);
-  ball.radius_m[0] = 0.0015;
-  ball.mass_kg[0] = lead_kg_m3 * 4.0 / 3.0 * std::numbers::pi * std::pow(0.0015, 3);
-  ball.position_m.col(0) = Eigen::Vector3d(0.001, 0, 0.003);
-  ball.velocity_m_s.col(0) = Eigen::Vector3d(0.05, 0, -0.2);
+  const Particles ball = test::spheres({{0.001, 0, 0.003}}, {{0.05, 0, -0.2}}, 0.0015, lead_kg_m3);
   auto engine = make_engine(M::model, s, ball, nullptr);
   const double m = ball.mass_kg[0], w = s.excitation.angular_frequency_rad_s(), f0 = s.excitation.force_N;
   auto momentum = [&] {

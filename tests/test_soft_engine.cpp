@@ -19,6 +19,7 @@
 using namespace pdamp;
 using namespace pdamp::soft;
 using pdamp::test::scenario_from;
+using pdamp::test::spheres;
 
 namespace {
 
@@ -26,19 +27,6 @@ namespace {
 const std::string wide_cavity =
     "[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n[particles]\ndiameter_m = 0.001\ncount = 2\n"
     "[gravity]\ng_m_s2 = 0\n[host]\nz0_m = 0\n";
-
-Particles spheres(const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& velocities,
-                  double radius = 0.0005, double density = 9000) {
-  Particles p(static_cast<Eigen::Index>(positions.size()));
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    const auto k = static_cast<Eigen::Index>(i);
-    p.position_m.col(k) = positions[i];
-    p.velocity_m_s.col(k) = velocities[i];
-    p.radius_m[k] = radius;
-    p.mass_kg[k] = density * 4.0 / 3.0 * std::numbers::pi * radius * radius * radius;
-  }
-  return p;
-}
 
 SoftEngineOptions held() {
   SoftEngineOptions o;

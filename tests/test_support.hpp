@@ -1,10 +1,14 @@
 #pragma once
 /// Helpers shared by the tests.
 
+#include <Eigen/Core>
 #include <filesystem>
+#include <numbers>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
+#include "pdamp/model/particles.hpp"
 #include "pdamp/scenario/scenario_loader.hpp"
 
 namespace pdamp::test {
@@ -17,6 +21,20 @@ inline std::filesystem::path scenario_file(const std::string& name) {
 /// A scenario from inline text (every unspecified key takes its default).
 inline Scenario scenario_from(const std::string& text, const ScenarioOverrides& overrides = {}) {
   return parse_scenario(text, "test", "test scenario", overrides);
+}
+
+/// Spheres at the given positions and velocities, at rest otherwise; 1 mm lead by default.
+inline Particles spheres(const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& velocities,
+                         double radius_m = 0.0005, double density_kg_m3 = 9000) {
+  Particles p(static_cast<Eigen::Index>(positions.size()));
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const auto k = static_cast<Eigen::Index>(i);
+    p.position_m.col(k) = positions[i];
+    p.velocity_m_s.col(k) = velocities[i];
+    p.radius_m[k] = radius_m;
+    p.mass_kg[k] = density_kg_m3 * 4.0 / 3.0 * std::numbers::pi * radius_m * radius_m * radius_m;
+  }
+  return p;
 }
 
 /// A fresh directory under the build tree's temporary folder, removed when destroyed.

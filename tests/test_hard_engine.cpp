@@ -5,11 +5,13 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <numbers>
 #include <random>
 
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/placement.hpp"
+#include "pdamp/sim/run.hpp"
 #include "pdamp/errors.hpp"
 #include "test_support.hpp"
 
@@ -64,6 +66,48 @@ const std::string gas_text =
     "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n"
     "[particles]\ncount = 400\ndiameter_m = 0.001\ndensity_kg_m3 = 8000\n"
     "[hard]\nen = 1\nmu = 0\n[hard_wall]\nen = 1\nmu = 0\n";
+
+constexpr double jam_radius_m = 0.0006;
+
+/// The `count` sites of a face-centred cubic packing of touching spheres of radius r
+/// nearest the origin, nearest first.
+std::vector<Eigen::Vector3d> fcc_sites_nearest_origin(int count, double r) {
+  std::vector<Eigen::Vector3d> sites;
+  const double edge = 2 * r * std::sqrt(2.0);
+  for (int x = -3; x <= 3; ++x) {
+    for (int y = -3; y <= 3; ++y) {
+      for (int z = -3; z <= 3; ++z) {
+        for (const Eigen::Vector3d& o : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.5, 0.5, 0),
+                                         Eigen::Vector3d(0.5, 0, 0.5), Eigen::Vector3d(0, 0.5, 0.5)}) {
+          sites.push_back(edge * (Eigen::Vector3d(x, y, z) + o));
+        }
+      }
+    }
+  }
+  std::stable_sort(sites.begin(), sites.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return a.norm() < b.norm() - 1e-12;
+  });
+  sites.resize(static_cast<std::size_t>(count));
+  return sites;
+}
+
+/// Spheres of jam_radius_m at `sites` + `offset`, jostling at ~3 mm/s and spinning at
+/// ~3000 rad/s; the last one 1000 times heavier than the rest, to drive into them.
+Particles jammable_cluster(const std::vector<Eigen::Vector3d>& sites, const Eigen::Vector3d& offset) {
+  const auto n = static_cast<Eigen::Index>(sites.size());
+  Particles p(n);
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> normal;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    p.radius_m[i] = jam_radius_m;
+    p.mass_kg[i] = 3.5e-6;
+    p.position_m.col(i) = sites[static_cast<std::size_t>(i)] + offset;
+    p.velocity_m_s.col(i) = 0.003 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    p.angular_velocity_rad_s.col(i) = 3000.0 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  }
+  p.mass_kg[n - 1] *= 1000.0;
+  return p;
+}
 
 }  // namespace
 
@@ -342,40 +386,14 @@ TEST_CASE("jam: a heavy sphere driven into a touching cluster in flight merges t
   // into a rigid body instead. No gravity, walls out of reach.
   const Scenario s = fixed_walls("[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.05\nheight_m = 0.05\n"
                                  "[particles]\ncount = 55\ndiameter_m = 0.0012\n[hard]\nen = 0.154\nmu = 0.55\nbeta0 = 0.35\n");
-  const int n = 55;
-  const double r = 0.0006;
-  std::vector<Eigen::Vector3d> sites;
-  const double edge = 2 * r * std::sqrt(2.0);
-  for (int x = -3; x <= 3; ++x) {
-    for (int y = -3; y <= 3; ++y) {
-      for (int z = -3; z <= 3; ++z) {
-        for (const Eigen::Vector3d& o : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.5, 0.5, 0),
-                                         Eigen::Vector3d(0.5, 0, 0.5), Eigen::Vector3d(0, 0.5, 0.5)}) {
-          sites.push_back(edge * (Eigen::Vector3d(x, y, z) + o));
-        }
-      }
-    }
-  }
-  std::stable_sort(sites.begin(), sites.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    return a.norm() < b.norm() - 1e-12;
-  });
-  Particles p(n);
-  std::mt19937_64 rng(1);
-  std::normal_distribution<double> normal;
-  for (int i = 0; i < n; ++i) {
-    p.radius_m[i] = r;
-    p.mass_kg[i] = 3.5e-6;
-    p.position_m.col(i) = sites[i] + Eigen::Vector3d(0, 0, 0.025);
-    p.velocity_m_s.col(i) = 0.003 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
-    p.angular_velocity_rad_s.col(i) = 3000.0 * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
-  }
-  p.mass_kg[n - 1] *= 1000.0;
-  p.velocity_m_s.col(n - 1) = -3.0 * sites[n - 1].normalized();
+  const std::vector<Eigen::Vector3d> sites = fcc_sites_nearest_origin(55, jam_radius_m);
+  Particles p = jammable_cluster(sites, Eigen::Vector3d(0, 0, 0.025));
+  p.velocity_m_s.col(54) = -3.0 * sites[54].normalized();
   HardEngine engine(s, p);
   auto momentum = [&] {
     const Particles q = engine.state().particles;
     Eigen::Vector3d total = Eigen::Vector3d::Zero();
-    for (int i = 0; i < n; ++i) total += q.mass_kg[i] * q.velocity_m_s.col(i);
+    for (int i = 0; i < 55; ++i) total += q.mass_kg[i] * q.velocity_m_s.col(i);
     return total;
   };
   const Eigen::Vector3d p0 = momentum();
@@ -389,4 +407,79 @@ TEST_CASE("jam: a heavy sphere driven into a touching cluster in flight merges t
   CHECK((momentum() - p0).norm() <= 1e-13 * p0.norm());
   CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
   CHECK(engine.observe().energy.dissipated_friction_J > 0);
+}
+
+TEST_CASE("jam: a cluster driven against the side wall sticks to the host instead of colliding without end") {
+  // The same cluster touching the side wall of a free host, and the heavy sphere driven
+  // into it towards the wall. Merged into a rigid body, the wedged spheres would be driven
+  // back into the wall at the same instant, and the wall back into them (Table 4 at 250 Hz
+  // stalled so after 486 000 collisions at one instant); held by the wall, they stick to
+  // the host. A free host with a negligible spring and no gravity: M v_h + Σ m v_z is
+  // constant, the side wall's friction being the only vertical impulse.
+  const Scenario s = test::scenario_from(
+      "[host]\nmass_kg = 0.01\nstiffness_N_m = 1e-20\ndamping_N_s_m = 0\nz0_m = 0\nv0_m_s = 0\n"
+      "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.012\nheight_m = 0.012\n"
+      "[particles]\ncount = 55\ndiameter_m = 0.0012\n[hard]\nen = 0.154\nmu = 0.55\nbeta0 = 0.35\n"
+      "[hard_wall]\nen = 0.3\nmu = 0.55\nbeta0 = 0.35\n");
+  std::vector<Eigen::Vector3d> sites = fcc_sites_nearest_origin(54, jam_radius_m);
+  const double edge = 2.0 * jam_radius_m * std::sqrt(2.0);
+  sites.push_back(Eigen::Vector3d(-2.0 * edge, 0, 0));  // the heavy sphere, 0.5 mm from the cluster
+  // The sphere at (edge, 0, 0) touches the side wall (1 nm apart).
+  const Eigen::Vector3d offset(0.006 - jam_radius_m - edge - 1e-9, 0, 0.006);
+  Particles p = jammable_cluster(sites, offset);
+  p.velocity_m_s.col(54) = Eigen::Vector3d(3.0, 0, 0);
+  HardEngine engine(s, p);
+  auto momentum = [&] {
+    const State st = engine.state();
+    double total = s.host.mass_kg * st.observation.host.v_m_s;
+    for (int i = 0; i < 55; ++i) total += st.particles.mass_kg[i] * st.particles.velocity_m_s(2, i);
+    return total;
+  };
+  const double p0 = momentum();
+  const double scale = p.mass_kg[54] * 3.0;
+  const double e0 = engine.observe().energy.stored_J();
+  for (int k = 1; k <= 20; ++k) {
+    engine.advance_to(2e-5 * k);
+    CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+    CHECK(std::abs(momentum() - p0) <= 1e-13 * scale);
+  }
+  CHECK(statistic(engine, "jam_merges") > 0);
+  CHECK(statistic(engine, "events_sphere_sphere") + statistic(engine, "events_wall") < 30000);
+  CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
+  // The heavy sphere is stopped against the wedged spheres.
+  const State end = engine.state();
+  const Eigen::Vector3d relative = end.particles.velocity_m_s.col(54) - end.observation.host.v_m_s * Eigen::Vector3d::UnitZ();
+  CHECK(relative.norm() <= 1e-4 * 3.0);
+}
+
+TEST_CASE("jam: Table 4's 250 Hz bed, hit by a cap at 15 m/s, gets past the wedges against the side wall") {
+  // Regression: spheres wedged between the side wall and their neighbours collided
+  // 486 000 times at t = 1.317 ms, each wall collision turning them back into a rigid
+  // cluster that the jam rule drove into the wall again, and the run stalled. The bed is
+  // the soft engine's settled one, and the run loop observes as `pdamp run` does (the
+  // event sequence depends on those times at round-off level).
+  Scenario s = load_scenario(test::scenario_file("table4_f250"));
+  s.run.duration_s = 0.0015;
+  std::ifstream file(test::source_dir() / "tests" / "data" / "table4_f250_settled_bed.txt");
+  REQUIRE(file);
+  file.ignore(std::numeric_limits<std::streamsize>::max(), '\n');  // the header
+  Particles p(s.particles.count);
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    for (auto* column : {&p.position_m, &p.velocity_m_s, &p.angular_velocity_rad_s}) {
+      file >> (*column)(0, i) >> (*column)(1, i) >> (*column)(2, i);
+    }
+    file >> p.radius_m[i] >> p.mass_kg[i];
+  }
+  REQUIRE(file);
+  HardEngine engine(s, p);
+  struct Discard final : RunRecorder {
+    void record_sample(const Observation&, double) override {}
+    void record_cycle(const CycleRecord&) override {}
+    void flush() override {}
+  } discard;
+  const RunOutcome outcome = run_simulation(engine, s, discard);
+  CHECK_MESSAGE(outcome.status == RunStatus::completed, outcome.message);
+  CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+  CHECK(statistic(engine, "jam_merges") > 0);
+  CHECK(outcome.max_energy_balance_rel_err <= 1e-9);
 }

@@ -54,9 +54,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       t_cross_s_(initial.size(), never),
       host_stamp_(initial.size(), 0),
       last_collision_s_(initial.size(), -never),
-      repeats_at_this_instant_(initial.size(), 0),
       riding_(initial.size(), 0),
-      jam_{-1.0, std::vector<int>(initial.size(), 0), std::vector<std::vector<int>>(initial.size()), {}},
+      jam_{-1.0, std::vector<int>(initial.size(), 0), std::vector<std::vector<int>>(initial.size()),
+           std::vector<std::uint8_t>(initial.size(), 0), {}},
       in_jam_(initial.size(), 0),
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
@@ -526,7 +526,6 @@ HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, 
   // A sphere wedged between two bodies collides again at the same instant; keeping those
   // repeats inelastic lets the sequence die out instead of bouncing elastically forever.
   const bool repeat = last_collision_s_[i] == t_s_ || (j >= 0 && last_collision_s_[j] == t_s_);
-  repeats_at_this_instant_[i] = last_collision_s_[i] == t_s_ ? repeats_at_this_instant_[i] + 1 : 0;
   last_collision_s_[i] = t_s_;
   if (j >= 0) last_collision_s_[j] = t_s_;
   if (approach_speed_m_s < resting_.elastic_speed_m_s && !repeat) law.en = 1.0;
@@ -536,7 +535,7 @@ HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, 
 void HardEngine::collide_spheres(int i, int j) {
   bring_to_now(i);
   bring_to_now(j);
-  if (note_jam(i, j)) {
+  if (note_collision(i, j)) {
     merge_jam(i);
     return;
   }
@@ -564,18 +563,25 @@ void HardEngine::collide_spheres(int i, int j) {
   predict(j);
 }
 
-bool HardEngine::note_jam(int i, int j) {
+bool HardEngine::note_collision(int i, int j, std::uint8_t hold) {
   if (jam_.t_s != t_s_) {
     for (const int k : jam_.involved) {
       jam_.count[k] = 0;
       jam_.partners[k].clear();
+      jam_.hold[k] = 0;
     }
     jam_.involved.clear();
     jam_.t_s = t_s_;
   }
-  for (const int k : {i, j}) {
+  const auto count = [this](int k) {
     if (jam_.count[k]++ == 0) jam_.involved.push_back(k);
+  };
+  count(i);
+  if (j < 0) {
+    jam_.hold[i] |= hold;
+    return jam_.count[i] > jam_repeats;
   }
+  count(j);
   std::vector<int>& of_i = jam_.partners[i];
   if (std::find(of_i.begin(), of_i.end(), j) == of_i.end()) {
     of_i.push_back(j);
@@ -590,14 +596,14 @@ void HardEngine::merge_jam(int i) {
   // collisions, and friction in a wedge can turn slip at one contact into approach at
   // the next for ever. Its limit is taken at once: the cluster (free spheres linked by
   // collisions at this instant, all touching since time has not moved) moves on as one
-  // rigid body with the same momentum and angular momentum. A rigid motion flown
-  // ballistically never brings two of its spheres closer, so no collision among them is
-  // left; the energy of the relative motion removed is the loss (≥ 0: the rigid motion
-  // is the kinetic-energy projection of the old one).
+  // rigid body. A cluster that a wall or the bed holds as well would be driven back into
+  // it by that rigid motion, so it sticks to the host.
   std::vector<int> members{i};
   std::vector<std::uint8_t>& in = in_jam_;
   in[i] = 1;
+  std::uint8_t hold = 0;
   for (std::size_t k = 0; k < members.size(); ++k) {
+    hold |= jam_.hold[members[k]];
     for (const int j : jam_.partners[members[k]]) {
       if (in[j] || riding_[j]) continue;
       in[j] = 1;
@@ -605,10 +611,29 @@ void HardEngine::merge_jam(int i) {
     }
   }
   std::sort(members.begin(), members.end());
+  for (const int k : members) {
+    bring_to_now(k);
+    new_trajectory(k);
+  }
+  merge_rigidly(members);
+  if (hold) stick_to_host(members, hold);
+  ++stats_.jam_merges;
+  stats_.jam_merged_spheres += static_cast<std::int64_t>(members.size());
+  for (const int k : members) {
+    in[k] = 0;
+    predict(k);
+  }
+}
+
+void HardEngine::merge_rigidly(const std::vector<int>& members) {
+  // The rigid body keeps the cluster's momentum and angular momentum. A rigid motion
+  // flown ballistically never brings two of its spheres closer, so no collision among
+  // them is left; the energy of the relative motion removed is the loss (≥ 0: the rigid
+  // motion is the kinetic-energy projection of the old one).
+  const std::vector<std::uint8_t>& in = in_jam_;
   double mass = 0.0;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero(), momentum = Eigen::Vector3d::Zero();
   for (const int k : members) {
-    bring_to_now(k);
     const double m = particles_.mass_kg[k];
     mass += m;
     centre += m * particles_.position_m.col(k);
@@ -647,17 +672,51 @@ void HardEngine::merge_jam(int i) {
             0.5 * particles_.moment_of_inertia(k) * (particles_.angular_velocity_rad_s.col(k) - spin).squaredNorm();
     particles_.velocity_m_s.col(k) = v;
     particles_.angular_velocity_rad_s.col(k) = spin;
-    ++counter_[k];
   }
   const double impact_share = total > 0.0 ? normal / total : 1.0;
   impact_J_ += impact_share * loss;
   friction_J_ += (1.0 - impact_share) * loss;
-  ++stats_.jam_merges;
-  stats_.jam_merged_spheres += static_cast<std::int64_t>(members.size());
+}
+
+void HardEngine::stick_to_host(const std::vector<int>& members, std::uint8_t hold) {
+  // The host moves only vertically, so the walls take the body's horizontal momentum and
+  // its spin, and the host its vertical momentum. Each part of the loss is impact where
+  // it is normal to a holding wall (horizontal at the side wall, vertical at a cap or the
+  // bed) and friction otherwise; the spin is friction.
+  const HostState host = host_.at(t_s_);
+  double mass = 0.0;
+  Eigen::Vector3d momentum = Eigen::Vector3d::Zero();
   for (const int k : members) {
-    in[k] = 0;
-    predict(k);
+    mass += particles_.mass_kg[k];
+    momentum += particles_.mass_kg[k] * particles_.velocity_m_s.col(k);
   }
+  const Eigen::Vector3d velocity = momentum / mass;
+  double spin_J = 0.0;
+  for (const int k : members) {
+    spin_J += 0.5 * particles_.mass_kg[k] * (particles_.velocity_m_s.col(k) - velocity).squaredNorm() +
+              0.5 * particles_.moment_of_inertia(k) * particles_.angular_velocity_rad_s.col(k).squaredNorm();
+  }
+  const double horizontal_J = 0.5 * mass * velocity.head<2>().squaredNorm();
+  const double relative_vz = velocity.z() - host.v_m_s;
+  HostState after = host;
+  double vertical_J;
+  if (host_model_.has_infinite_mass()) {
+    vertical_J = 0.5 * mass * relative_vz * relative_vz;
+    excitation_J_ += mass * (host.v_m_s - velocity.z()) * host.v_m_s;  // the host's work on the body
+  } else {
+    const double carried = host_model_.mass_kg() + riding_mass_kg_;
+    vertical_J = 0.5 * mass * carried / (mass + carried) * relative_vz * relative_vz;
+    after.v_m_s = (carried * host.v_m_s + mass * velocity.z()) / (carried + mass);
+  }
+  const bool side = hold & held_by_side_wall, cap = hold & held_by_cap_or_bed;
+  impact_J_ += (side ? horizontal_J : 0.0) + (cap ? vertical_J : 0.0);
+  friction_J_ += spin_J + (side ? 0.0 : horizontal_J) + (cap ? 0.0 : vertical_J);
+  for (const int k : members) {
+    particles_.velocity_m_s.col(k) = after.v_m_s * e_z;
+    particles_.angular_velocity_rad_s.col(k).setZero();
+    leave_host_sets(k);
+  }
+  if (after.v_m_s != host.v_m_s) restart_host(after);
 }
 
 double HardEngine::host_inverse_mass_1_kg() const {
@@ -682,6 +741,10 @@ void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const Colli
 
 void HardEngine::collide_wall(int i, EventKind wall) {
   bring_to_now(i);
+  if (note_collision(i, -1, wall == EventKind::side_wall ? held_by_side_wall : held_by_cap_or_bed)) {
+    merge_jam(i);
+    return;
+  }
   const HostState host = host_.at(t_s_);
   const Eigen::Vector3d x = particles_.position_m.col(i);
   Eigen::Vector3d n;  // from the sphere towards the wall
@@ -737,7 +800,8 @@ void HardEngine::collide_rider(int i, int j) {
   const Eigen::Vector3d n = -dx.normalized();
   const double approach = -dx.dot(dv) / dx.norm();
   const Eigen::Vector3d u = dv + (ri * particles_.angular_velocity_rad_s.col(i)).cross(n);
-  if (repeats_at_this_instant_[i] >= jam_repeats && approach <= resting_.rest_speed_m_s) {
+  const bool jammed = note_collision(i, -1, held_by_cap_or_bed);
+  if (jammed && approach <= resting_.rest_speed_m_s) {
     // Wedged among riders and still colliding at this one instant: friction can turn the
     // slip along one contact into approach towards the next for ever. The sphere is
     // jammed in the bed, so it comes to rest in it.

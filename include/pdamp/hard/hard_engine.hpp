@@ -28,6 +28,10 @@
 /// hard.rest_speed_m_s while the host's acceleration presses it there stops and rides
 /// with the host as added mass (no events at all) until the host's acceleration stops
 /// pressing (the whole bed is released) or a sphere hits it faster than that speed.
+///
+/// Jams: spheres that keep colliding at one instant (inelastic collapse, or friction in a
+/// wedge) merge into a rigid body, which also sticks to the host if a wall or the bed
+/// holds it (merge_jam).
 
 #include <array>
 #include <optional>
@@ -113,12 +117,20 @@ class HardEngine final : public Engine {
   // Events.
   void handle(const Event& event);
   void collide_spheres(int i, int j);
-  /// Records a collision of free spheres i and j at this instant; true once either has
-  /// collided jam_repeats times at it (the two are wedged in a jammed cluster).
-  bool note_jam(int i, int j);
+  /// What a sphere collided with at this instant, besides free spheres.
+  enum Hold : std::uint8_t { held_by_side_wall = 1, held_by_cap_or_bed = 2 };
+  /// Records a collision of free sphere i at this instant with free sphere j, or with the
+  /// host (j < 0; `hold` says which part); true once i or j has collided more than
+  /// jam_repeats times at it (wedged in a jammed cluster).
+  bool note_collision(int i, int j, std::uint8_t hold = 0);
   /// The jammed cluster of i (free spheres linked by collisions at this instant) stops
-  /// all relative motion: a perfectly inelastic, sticking merge into a rigid body.
+  /// all relative motion: a perfectly inelastic, sticking merge into a rigid body, which
+  /// also sticks to the host if a wall or the bed holds any of its spheres.
   void merge_jam(int i);
+  /// merge_jam's rigid merge of `members` (flagged in in_jam_).
+  void merge_rigidly(const std::vector<int>& members);
+  /// merge_jam's perfectly inelastic, sticking collision of the rigid `members` with the host.
+  void stick_to_host(const std::vector<int>& members, std::uint8_t hold);
   void collide_wall(int i, EventKind wall);
   void collide_rider(int i, int j);
   void turn_along_side_wall(int i, const Eigen::Vector3d& outward);
@@ -163,13 +175,14 @@ class HardEngine final : public Engine {
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
   std::vector<double> last_collision_s_;
-  std::vector<int> repeats_at_this_instant_;  ///< collisions of each sphere at last_collision_s_, less one
   std::vector<std::uint8_t> riding_;
-  /// Collisions between free spheres at the instant t_s: per sphere how many, and with whom.
+  /// The collisions of free spheres at the instant t_s: per sphere how many, with which
+  /// free spheres, and which parts of the host (Hold bits).
   struct Jam {
     double t_s = -1.0;
     std::vector<int> count;
     std::vector<std::vector<int>> partners;
+    std::vector<std::uint8_t> hold;
     std::vector<int> involved;  ///< spheres with a count, to reset them when time moves on
   } jam_;
   std::vector<std::uint8_t> in_jam_;  ///< scratch for merge_jam

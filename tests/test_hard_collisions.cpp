@@ -183,6 +183,44 @@ TEST_CASE("cap contacts under a fast host: never an earlier contact than the one
   CHECK(contacts > 100);
 }
 
+TEST_CASE("a sphere left behind by a floor that accelerates away is caught again at the right time, in few steps") {
+  // A floor z_h = A sin ωt at Γ = 1.05, and a sphere that leaves it at its top dead centre
+  // with its velocity (0): the floor drops away a little faster than gravity, turns and
+  // catches the sphere. The curvature bound alone (g + Aω²) lets the steps grow by only
+  // ~5 % each while the gap opens at 0.05 g (78 evaluations); the jerk bound lets the
+  // search wait for the floor's acceleration to turn (20).
+  const double amplitude = 0.001, omega = std::sqrt(1.05 * 9.81 / amplitude);
+  const PrescribedHost host(amplitude, omega / (2 * std::numbers::pi));
+  const Eigen::Vector3d g(0, 0, -9.81);
+  const double r = 5e-4, tolerance = 1e-14;
+  const double t0 = 0.5 * std::numbers::pi / omega;  // the top: z_h = A, v_h = 0
+  const HostState h0 = host.trajectory.at(t0);
+  const Ballistic flight{Eigen::Vector3d(0, 0, h0.z_m + r), Eigen::Vector3d(0, 0, h0.v_m_s), t0};
+  const double t1 = t0 + 2 * std::numbers::pi / omega;
+  int evaluations = 0;
+  auto gap = [&](double t) {
+    ++evaluations;
+    const HostState h = host.trajectory.at(t);
+    return GapSample{flight.position_at(t, g).z() - r - h.z_m, flight.velocity_at(t, g).z() - h.v_m_s,
+                     g.z() - host.trajectory.acceleration_m_s2(t)};
+  };
+  const double bound = 9.81 + host.trajectory.acceleration_bound_m_s2();
+  const Approach found =
+      earliest_contact(gap, t0, t1, bound, tolerance, min_approach_speed_m_s, host.trajectory.jerk_bound_m_s3());
+  REQUIRE(found.contact);
+  // Brute force: the gap is positive between leaving and the contact found, which is the
+  // first time it returns to zero.
+  auto gap_at = [&](double t) { return flight.position_at(t, g).z() - r - host.trajectory.at(t).z_m; };
+  for (int k = 1; k < 20000; ++k) REQUIRE(gap_at(t0 + (found.t_s - t0) * k / 20000.0) >= -tolerance);
+  CHECK(std::abs(gap_at(found.t_s)) <= tolerance);
+  CHECK(found.t_s - t0 > 0.25 / omega);
+  CHECK(evaluations < 60);
+  // And cap_contact, which supplies the acceleration and the jerk bound itself, agrees.
+  const Approach cap = cap_contact(flight, r, false, 0.01, host.trajectory, h0, g, t0, t1, tolerance);
+  REQUIRE(cap.contact);
+  CHECK(cap.t_s == doctest::Approx(found.t_s).epsilon(1e-12));
+}
+
 TEST_CASE("grazing: a path that just misses the floor is not a contact, one that just touches is") {
   // Gravity pointing up: a sphere moving down at v towards a fixed floor decelerates and
   // comes closest, gap0 − v²/2g, at t = v/g.

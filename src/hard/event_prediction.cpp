@@ -8,16 +8,17 @@ namespace pdamp::hard {
 Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double height_m, const HostTrajectory& host,
                      const HostState& host_at_t0, const Eigen::Vector3d& g, double t0, double t1, double tolerance_m,
                      double min_closing_rate_m_s) {
-  // Bottom: gap = z − r − z_h; top: gap = z_h + H − z − r. |gap''| = |g_z − z_h''|.
+  // Bottom: gap = z − r − z_h; top: gap = z_h + H − z − r. gap'' = ±(g_z − z_h''), and
+  // |gap'''| = |z_h'''|.
   const double sign = top ? -1.0 : 1.0;
   const double offset = top ? radius_m - height_m : radius_m;
   auto gap = [&](double t) {
     const HostState h = t == t0 ? host_at_t0 : host.at(t);
     const double z = flight.position_at(t, g).z(), vz = flight.velocity_at(t, g).z();
-    return GapSample{sign * (z - h.z_m) - offset, sign * (vz - h.v_m_s)};
+    return GapSample{sign * (z - h.z_m) - offset, sign * (vz - h.v_m_s), sign * (g.z() - host.acceleration_m_s2(t, h))};
   };
   return earliest_contact(gap, t0, t1, std::abs(g.z()) + host.acceleration_bound_m_s2(), tolerance_m,
-                          min_closing_rate_m_s);
+                          min_closing_rate_m_s, host.jerk_bound_m_s3());
 }
 
 Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, double contact_distance_m,

@@ -191,10 +191,11 @@ HostState HostTrajectory::at(double t_s) const {
           w * (forced_sin_m_ * cos_wt - forced_cos_m_ * sin_wt) + du};
 }
 
-double HostTrajectory::acceleration_m_s2(double t_s) const {
+double HostTrajectory::acceleration_m_s2(double t_s) const { return acceleration_m_s2(t_s, at(t_s)); }
+
+double HostTrajectory::acceleration_m_s2(double t_s, const HostState& state) const {
   if (model_->has_infinite_mass()) return model_->prescribed_acceleration_m_s2(t_s);
-  const HostState s = at(t_s);
-  return (model_->force_N(t_s, s) + model_->stiffness_N_m() * offset_m_) / mass_kg_;
+  return (model_->force_N(t_s, state) + model_->stiffness_N_m() * offset_m_) / mass_kg_;
 }
 
 template <class Integrand>

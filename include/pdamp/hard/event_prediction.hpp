@@ -83,7 +83,23 @@ struct Approach {
 struct GapSample {
   double value;
   double rate;
+  /// gap'' now, where it is cheap to know (caps); −∞ where it is not.
+  double acceleration = -never;
 };
+
+/// A step that cannot skip a contact, from the gap's acceleration a > 0 and a bound J
+/// on |gap'''|: up to s = 1.5 a/J the jerk takes at most half of ½ a s², so the gap stays
+/// above value + rate·s + ¼ a s². It lets a sphere that touches a receding cap wait for
+/// the cap's acceleration to turn, where the curvature bound alone would creep along in
+/// steps of √(2·tolerance/bound). 0 when it does not apply.
+inline double jerk_limited_step(double value, double rate, double acceleration, double jerk_bound) {
+  if (!(acceleration > 0.0)) return 0.0;
+  const double horizon = jerk_bound > 0.0 ? 1.5 * acceleration / jerk_bound : never;
+  const double quarter = 0.25 * acceleration;
+  const double discriminant = rate * rate - 4.0 * quarter * value;
+  if (rate >= 0.0 || discriminant < 0.0) return horizon;
+  return std::min(horizon, 2.0 * value / (std::sqrt(discriminant) - rate));  // the first root
+}
 
 /// The first t in [t0, t1] where gap(t) ≤ tolerance while closing faster than
 /// `min_closing_rate` (in the gap's units per second), given |gap''| ≤
@@ -91,10 +107,11 @@ struct GapSample {
 /// gap + rate·h − ½·bound·h² ≥ 0, so no contact lies inside a step; near a contact the
 /// steps shrink quadratically (Newton from the safe side); past a grazing minimum they
 /// grow again. Unless closing, steps are at least √(2·tolerance/bound), so an overlap is
-/// never deeper than about `tolerance`.
+/// never deeper than about `tolerance`. With the gap's acceleration in the samples and a
+/// `jerk_bound` on |gap'''|, a step is also as long as jerk_limited_step allows.
 template <class Gap>
 Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound, double tolerance,
-                          double min_closing_rate) {
+                          double min_closing_rate, double jerk_bound = never) {
   constexpr int max_steps = 200;
   const double bound = curvature_bound > 0 ? curvature_bound : std::numeric_limits<double>::min();
   const double min_step = std::sqrt(2.0 * tolerance / bound);
@@ -104,7 +121,8 @@ Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound,
     if (s.value <= tolerance && s.rate < -min_closing_rate) return {t, true};
     const double v = std::max(s.value, 0.0);
     const double root = std::sqrt(s.rate * s.rate + 2.0 * bound * v);
-    const double h = s.rate < 0 ? 2.0 * v / (root - s.rate) : (s.rate + root) / bound;
+    const double h = std::max(s.rate < 0 ? 2.0 * v / (root - s.rate) : (s.rate + root) / bound,
+                              jerk_limited_step(v, s.rate, s.acceleration, jerk_bound));
     // Closing: the safe steps converge like Newton's. Touching without closing: the
     // minimum step gets past the stagnation and dips at most `tolerance` below zero.
     t += s.rate < -min_closing_rate ? h : std::max(h, min_step);

@@ -76,6 +76,8 @@ class HostTrajectory {
   double t0_s() const { return t0_s_; }
   HostState at(double t_s) const;
   double acceleration_m_s2(double t_s) const;
+  /// The same, given the state at t_s (saves evaluating it again).
+  double acceleration_m_s2(double t_s, const HostState& state) const;
 
   /// Bounds on |z'| and |z''| that hold for every t ≥ t0 (the host's energy relative to
   /// its forced response can only decrease between impulses).

@@ -337,14 +337,18 @@ void HardEngine::predict(int i) {
   if (guard < horizon) push({guard, i, 0, counter_[i], 0, EventKind::host_check});
 }
 
-void HardEngine::predict_host_relative(int i) {
+void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   const double t = t_s_;
   const double horizon = t_cross_s_[i];
   const std::uint32_t stamp = ++host_stamp_[i];
   // Down the tiers while the sphere is within each one's margin.
-  for (std::size_t level = 0; level < tiers_.size(); ++level) {
+  for (std::size_t level = first_level; level < tiers_.size(); ++level) {
     const HostContact margin = host_contact(i, std::min(horizon, t + tiers_[level].horizon_s), tiers_[level].margin_m);
     if (!(margin.when.contact && margin.when.t_s <= t)) {
+      if (level == first_level && level > 0) {
+        predict_host_relative(i);  // it has left the tier it was in: from the top
+        return;
+      }
       for (std::size_t deeper = level + 1; deeper < tiers_.size(); ++deeper) tiers_[deeper].members.erase(i);
       touching_.erase(i);
       if (margin.when.t_s < horizon) push({margin.when.t_s, i, 0, counter_[i], stamp, EventKind::host_margin});
@@ -437,7 +441,7 @@ void HardEngine::sweep_tier(std::size_t level) {
   tier.members.sweep([&](int i) {
     tier.members.insert(i);
     ++tier.repredictions;
-    predict_host_relative(i);
+    predict_host_relative(i, level);
   });
 }
 
@@ -896,7 +900,7 @@ void HardEngine::restart_host(HostState start) {
   } else {
     touching_.sweep([this](int i) {
       ++stats_.touching_repredictions;
-      predict_host_relative(i);
+      predict_host_relative(i, tiers_.size() - 1);
     });
   }
   predict_bed_release();

@@ -98,7 +98,9 @@ class HardEngine final : public Engine {
   // Prediction.
   void push(const Event& event) { queue_.push(event); }
   void predict(int i);
-  void predict_host_relative(int i);
+  /// Predicts free sphere i's host-dependent event, starting the descent through the
+  /// tiers at `first_level` (a tier it is in: the levels above it are known to hold it).
+  void predict_host_relative(int i, std::size_t first_level = 0);
   void predict_bed_release();
   void sweep_tier(std::size_t level);
   void repredict_near_around(const Eigen::Vector3d& lab_position);

@@ -443,7 +443,7 @@ TEST_CASE("jam: a cluster driven against the side wall sticks to the host instea
     CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
     CHECK(std::abs(momentum() - p0) <= 1e-13 * scale);
   }
-  CHECK(statistic(engine, "jam_merges") > 0);
+  CHECK(statistic(engine, "jam_stuck_to_host") > 0);
   CHECK(statistic(engine, "events_sphere_sphere") + statistic(engine, "events_wall") < 30000);
   CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
   // The heavy sphere is stopped against the wedged spheres.
@@ -480,6 +480,6 @@ TEST_CASE("jam: Table 4's 250 Hz bed, hit by a cap at 15 m/s, gets past the wedg
   const RunOutcome outcome = run_simulation(engine, s, discard);
   CHECK_MESSAGE(outcome.status == RunStatus::completed, outcome.message);
   CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
-  CHECK(statistic(engine, "jam_merges") > 0);
+  CHECK(statistic(engine, "jam_stuck_to_host") > 0);
   CHECK(outcome.max_energy_balance_rel_err <= 1e-9);
 }

@@ -209,6 +209,7 @@ EngineStatistics HardEngine::statistics() const {
           {"bed_jammed", stats_.jammed},
           {"jam_merges", stats_.jam_merges},
           {"jam_merged_spheres", stats_.jam_merged_spheres},
+          {"jam_stuck_to_host", stats_.jam_stuck_to_host},
           {"host_impulses", stats_.host_impulses},
           {"near_sweeps", tiers_[0].sweeps},
           {"near_repredictions", tiers_[0].repredictions},
@@ -620,7 +621,10 @@ void HardEngine::merge_jam(int i) {
     new_trajectory(k);
   }
   merge_rigidly(members);
-  if (hold) stick_to_host(members, hold);
+  if (hold) {
+    stick_to_host(members, hold);
+    ++stats_.jam_stuck_to_host;
+  }
   ++stats_.jam_merges;
   stats_.jam_merged_spheres += static_cast<std::int64_t>(members.size());
   for (const int k : members) {

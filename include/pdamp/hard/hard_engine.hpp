@@ -240,7 +240,7 @@ class HardEngine final : public Engine {
   struct Statistics {
     std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
                  host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, jammed = 0, host_impulses = 0,
-                 jam_merges = 0, jam_merged_spheres = 0,
+                 jam_merges = 0, jam_merged_spheres = 0, jam_stuck_to_host = 0,
                  touching_repredictions = 0, rebuilds = 0;
   } stats_;
 };

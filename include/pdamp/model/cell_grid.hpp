@@ -71,11 +71,16 @@ inline int CellGrid::index(const CellCoord& c) const {
 }
 
 inline int CellGrid::neighbours(const CellCoord& c, std::array<int, 27>& out) const {
+  // The three layers wrapped once, not each cell: integer divisions are slow.
+  const int layer = index({0, 0, c.iz});
+  const int layer_size = n_xy_ * n_xy_, period = n_z_ * layer_size;
+  const std::array<int, 3> layers{layer == 0 ? period - layer_size : layer - layer_size, layer,
+                                  layer + layer_size == period ? 0 : layer + layer_size};
   int count = 0;
-  for (int dz = -1; dz <= 1; ++dz) {
+  for (const int z_offset : layers) {
     for (int iy = std::max(0, c.iy - 1); iy <= std::min(n_xy_ - 1, c.iy + 1); ++iy) {
       for (int ix = std::max(0, c.ix - 1); ix <= std::min(n_xy_ - 1, c.ix + 1); ++ix) {
-        out[count++] = index({ix, iy, c.iz + dz});
+        out[count++] = z_offset + iy * n_xy_ + ix;
       }
     }
   }

@@ -5,6 +5,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <sstream>
+#include <tuple>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
@@ -369,8 +370,12 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   // A margin is reached whichever way the sphere moves: a sphere within it but receding
   // can still be caught by a host that strays by less than the margin.
   const double closing = margin_m > 0.0 ? within_margin : min_approach_speed_m_s;
+  // A tie goes to a contact, then to the lower kind and partner: a sphere wedged in a bed
+  // touches several riders at once, and the cells may list them in any order.
   auto consider = [&](const Approach& a, EventKind kind, int partner) {
-    if (a.t_s < best.when.t_s || (a.contact && !best.when.contact && a.t_s == best.when.t_s)) best = {a, kind, partner};
+    const bool wins_tie = a.t_s == best.when.t_s && a.contact &&
+                          (!best.when.contact || std::tie(kind, partner) < std::tie(best.kind, best.partner));
+    if (a.t_s < best.when.t_s || wins_tie) best = {a, kind, partner};
   };
   const double height = cavity_.height_m();
   const HostState host = host_now();

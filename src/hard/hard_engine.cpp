@@ -62,9 +62,11 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
-      free_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
+      free_cells_(grid_.cell_count() + 1, static_cast<int>(initial.size())),  // + enter_cell's empty stand-in
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       queue_(static_cast<int>(initial.size())),
+      neighbours_(initial.size() + CellMembers::copy_width),
+      meeting_pairs_(initial.size()),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
@@ -296,19 +298,25 @@ void HardEngine::predict(int i) {
   t_cross_s_[i] = horizon;
   if (face >= 0) push({horizon, i, face, counter_[i], 0, EventKind::cell_crossing});
 
-  // The spheres around first, then their contact times in one loop that does not wait
-  // on walking the cells' lists.
-  const Around& around = around_[i];
-  neighbours_.clear();
-  for (int k = 0; k < around.count; ++k) {
-    free_cells_.for_each_in(around.cells[k], [&](int j) {
-      if (j != i) neighbours_.push_back(j);
-    });
-  }
-  for (const int j : neighbours_) {
+  // The spheres around first, then which of them i meets, without branches (i itself
+  // does not: it neither approaches nor recedes), then only those spheres' contact times.
+  int* const candidates = neighbours_.data();
+  int candidate_count = 0;
+  for (const int cell : around_[i]) candidate_count += free_cells_.copy_members(cell, candidates + candidate_count);
+  int meeting_count = 0;
+  for (int k = 0; k < candidate_count; ++k) {
+    const int j = candidates[k];
     const Ballistic fj = flight(j);
-    const double s = sphere_sphere_time(x - fj.position_at(t, g), v - fj.velocity_at(t, g), r + particles_.radius_m[j]);
-    if (t + s < horizon) push({t + s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
+    const double contact = r + particles_.radius_m[j];
+    const PairQuadratic pair = PairQuadratic::of(x - fj.position_at(t, g), v - fj.velocity_at(t, g), contact);
+    candidates[meeting_count] = j;
+    meeting_pairs_[meeting_count] = pair;
+    meeting_count += pair.meets(contact);
+  }
+  for (int k = 0; k < meeting_count; ++k) {
+    const int j = candidates[k];
+    const double contact_s = t + meeting_pairs_[k].time_s();
+    if (contact_s < horizon) push({contact_s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
   }
 
   // The side wall, if any point of the cell is within reach of it.
@@ -781,8 +789,9 @@ void HardEngine::cross_face(int i, Face face) {
 
 void HardEngine::enter_cell(int i, const CellCoord& c) {
   cell_[i] = c;
-  Around& a = around_[i];
-  a.count = grid_.neighbours(c, a.cells);
+  Around& around = around_[i];
+  const int count = grid_.neighbours(c, around);
+  std::fill(around.begin() + count, around.end(), grid_.cell_count());  // the empty stand-in
   free_cells_.insert(i, grid_.index(c));
 }
 

@@ -154,11 +154,9 @@ class HardEngine final : public Engine {
   std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
   /// The cells around each free sphere's cell (itself included), kept because every
-  /// prediction needs them and working them out costs two integer divisions per cell.
-  struct Around {
-    std::array<int, 27> cells;
-    int count;
-  };
+  /// prediction needs them. Always 27: at the side of the grid an empty cell stands in
+  /// for the missing ones, so that gathering the neighbours is a loop of fixed length.
+  using Around = std::array<int, 27>;
   std::vector<Around> around_;
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
@@ -195,6 +193,7 @@ class HardEngine final : public Engine {
   CellMembers rider_cells_;  ///< riding spheres by host-frame cell
   EventQueue queue_;
   std::vector<int> neighbours_;  ///< predict's scratch: the free spheres around the one predicted
+  std::vector<PairQuadratic> meeting_pairs_;  ///< predict's scratch: the contact tests of those it meets
   double contact_tolerance_m_;
   double max_radius_m_;
   double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart

@@ -48,7 +48,6 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       fastest_host_rate_1_s_(std::max(scenario.excitation.angular_frequency_rad_s(),
                                       std::sqrt(scenario.host.stiffness_N_m / scenario.host.mass_kg))),
       particles_(initial),
-      t_ref_s_(initial.size(), 0.0),
       counter_(initial.size(), 0),
       cell_(initial.size()),
       around_(initial.size()),
@@ -76,7 +75,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
   stall_limit_ = 1000 * static_cast<std::int64_t>(initial.size()) + 100000;
   // A bed settled with soft contacts overlaps by a tiny fraction of a radius: the hard
   // engine starts from it with the spheres pushed just apart.
-  separation_m_ = separate_overlaps(particles_, scenario.cavity, host_.at(0.0).z_m);
+  Particles separated = initial;
+  separation_m_ = separate_overlaps(separated, scenario.cavity, host_.at(0.0).z_m);
+  particles_.assign(separated);
   const int n = static_cast<int>(particles_.size());
   for (int i = 0; i < n; ++i) {
     enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
@@ -139,11 +140,11 @@ void HardEngine::bring_to_now(int i) {
   const Ballistic f = flight(i);
   particles_.position_m.col(i) = f.position_at(t_s_, gravity_m_s2_);
   particles_.velocity_m_s.col(i) = f.velocity_at(t_s_, gravity_m_s2_);
-  t_ref_s_[i] = t_s_;
+  particles_.t_ref_s[i] = t_s_;
 }
 
 State HardEngine::state() const {
-  State s{observe(), particles_};
+  State s{observe(), particles_.unpacked()};
   const HostState host = s.observation.host;
   for (Eigen::Index i = 0; i < particles_.size(); ++i) {
     const int k = static_cast<int>(i);
@@ -303,6 +304,8 @@ void HardEngine::predict(int i) {
   int* const candidates = neighbours_.data();
   int candidate_count = 0;
   for (const int cell : around_[i]) candidate_count += free_cells_.copy_members(cell, candidates + candidate_count);
+  // Among many spheres the records are cache misses: ask for all of them at once.
+  for (int k = 0; k < candidate_count; ++k) __builtin_prefetch(&particles_.record(candidates[k]));
   int meeting_count = 0;
   for (int k = 0; k < candidate_count; ++k) {
     const int j = candidates[k];
@@ -921,7 +924,7 @@ void HardEngine::detach(int i, const HostState& host) {
   new_trajectory(i);
   particles_.position_m.col(i) += host.z_m * e_z;
   particles_.velocity_m_s.col(i) = host.v_m_s * e_z;
-  t_ref_s_[i] = t_s_;
+  particles_.t_ref_s[i] = t_s_;
   enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
   --riding_count_;
   riding_mass_kg_ = riding_count_ > 0 ? riding_mass_kg_ - particles_.mass_kg[i] : 0.0;

@@ -38,6 +38,7 @@
 #include "pdamp/hard/collision_rules.hpp"
 #include "pdamp/hard/event_prediction.hpp"
 #include "pdamp/hard/event_queue.hpp"
+#include "pdamp/hard/packed_particles.hpp"
 #include "pdamp/hard/particle_set.hpp"
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/cell_grid.hpp"
@@ -73,7 +74,7 @@ class HardEngine final : public Engine {
   enum Face : int { x_lower, x_upper, y_lower, y_upper, z_lower, z_upper };
 
   Ballistic flight(int i) const {
-    return {particles_.position_m.col(i), particles_.velocity_m_s.col(i), t_ref_s_[i]};
+    return {particles_.position_m.col(i), particles_.velocity_m_s.col(i), particles_.t_ref_s[i]};
   }
   /// Lab-frame position of any sphere now (free or riding).
   Eigen::Vector3d position_now(int i, const HostState& host) const;
@@ -149,8 +150,7 @@ class HardEngine final : public Engine {
 
   // Spheres: free ones hold lab position and velocity at t_ref; riding ones hold their
   // host-frame position (lab position minus z_host e_z).
-  Particles particles_;
-  std::vector<double> t_ref_s_;
+  PackedParticles particles_;
   std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
   /// The cells around each free sphere's cell (itself included), kept because every

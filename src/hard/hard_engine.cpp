@@ -270,7 +270,7 @@ bool HardEngine::is_current(const Event& e) const {
   return host_epoch_ == e.count_j;
 }
 
-void HardEngine::predict(int i) {
+void HardEngine::predict(int i, std::span<const int> new_cells) {
   const double t = t_s_;
   const Ballistic f = flight(i);
   const Eigen::Vector3d x = f.position_at(t, gravity_m_s2_), v = f.velocity_at(t, gravity_m_s2_);
@@ -278,7 +278,8 @@ void HardEngine::predict(int i) {
   const CellCoord c = cell_[i];
   const Eigen::Vector3d& g = gravity_m_s2_;
 
-  // The next face crossing bounds every other prediction: the sphere is predicted anew there.
+  // The next face crossing bounds the predictions of walls and host: the sphere is
+  // predicted anew there.
   double crossing = never;
   int face = -1;
   const std::array<int, 3> index{c.ix, c.iy, c.iz};
@@ -299,11 +300,12 @@ void HardEngine::predict(int i) {
   t_cross_s_[i] = horizon;
   if (face >= 0) push({horizon, i, face, counter_[i], 0, EventKind::cell_crossing});
 
-  // The spheres around first, then which of them i meets, without branches (i itself
-  // does not: it neither approaches nor recedes), then only those spheres' contact times.
+  // The spheres in the new cells first, then which of them i meets, without branches (i
+  // itself does not: it neither approaches nor recedes), then only those spheres'
+  // contact times, however late: a contact is exact whichever cells the two are in.
   int* const candidates = neighbours_.data();
   int candidate_count = 0;
-  for (const int cell : around_[i]) candidate_count += free_cells_.copy_members(cell, candidates + candidate_count);
+  for (const int cell : new_cells) candidate_count += free_cells_.copy_members(cell, candidates + candidate_count);
   // Among many spheres the records are cache misses: ask for all of them at once.
   for (int k = 0; k < candidate_count; ++k) __builtin_prefetch(&particles_.record(candidates[k]));
   int meeting_count = 0;
@@ -318,8 +320,7 @@ void HardEngine::predict(int i) {
   }
   for (int k = 0; k < meeting_count; ++k) {
     const int j = candidates[k];
-    const double contact_s = t + meeting_pairs_[k].time_s();
-    if (contact_s < horizon) push({contact_s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
+    push({t + meeting_pairs_[k].time_s(), i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
   }
 
   // The side wall, if any point of the cell is within reach of it.
@@ -787,14 +788,21 @@ void HardEngine::cross_face(int i, Face face) {
   }
   free_cells_.remove(i);
   enter_cell(i, c);
-  predict(i);
+  // Only the layer of cells beyond the face is new around i: its contacts with the
+  // spheres in the others were predicted with the same trajectory.
+  constexpr std::array<int, 3> stride{1, 3, 9};  // in Around, of x, y and z
+  const int axis = face / 2, beyond = (face % 2 == 1 ? 2 : 0) * stride[axis];
+  const int u_stride = stride[(axis + 1) % 3], w_stride = stride[(axis + 2) % 3];
+  std::array<int, 9> entered{};
+  for (int u = 0; u < 3; ++u) {
+    for (int w = 0; w < 3; ++w) entered[3 * u + w] = around_[i][beyond + u * u_stride + w * w_stride];
+  }
+  predict(i, entered);
 }
 
 void HardEngine::enter_cell(int i, const CellCoord& c) {
   cell_[i] = c;
-  Around& around = around_[i];
-  const int count = grid_.neighbours(c, around);
-  std::fill(around.begin() + count, around.end(), grid_.cell_count());  // the empty stand-in
+  grid_.block(c, grid_.cell_count(), around_[i]);  // the empty stand-in beyond the sides
   free_cells_.insert(i, grid_.index(c));
 }
 

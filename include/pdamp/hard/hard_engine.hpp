@@ -31,6 +31,7 @@
 
 #include <array>
 #include <optional>
+#include <span>
 #include <cstdint>
 #include <vector>
 
@@ -94,7 +95,11 @@ class HardEngine final : public Engine {
 
   // Prediction.
   void push(const Event& event) { queue_.push(event); }
-  void predict(int i);
+  /// Predicts every event of free sphere i anew (its trajectory changed).
+  void predict(int i) { predict(i, around_[i]); }
+  /// Predicts sphere i's events anew, but its contacts only with the spheres in
+  /// `new_cells` (it has just crossed into a cell whose other neighbours it already had).
+  void predict(int i, std::span<const int> new_cells);
   void predict_host_relative(int i);
   void predict_bed_release();
   void sweep_tier(std::size_t level);
@@ -153,9 +158,10 @@ class HardEngine final : public Engine {
   PackedParticles particles_;
   std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
-  /// The cells around each free sphere's cell (itself included), kept because every
-  /// prediction needs them. Always 27: at the side of the grid an empty cell stands in
-  /// for the missing ones, so that gathering the neighbours is a loop of fixed length.
+  /// The 3 × 3 × 3 cells around each free sphere's cell (CellGrid::block), kept because
+  /// every prediction needs them. Beyond the grid's sides an empty cell stands in, so that
+  /// gathering the neighbours is a loop of fixed length and the layer entered at a face
+  /// crossing is at fixed places.
   using Around = std::array<int, 27>;
   std::vector<Around> around_;
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face

@@ -40,6 +40,9 @@ class CellGrid {
 
   /// The distinct cells within one cell of `c` (itself included); returns how many.
   int neighbours(const CellCoord& c, std::array<int, 27>& out) const;
+  /// The 3 × 3 × 3 cells around `c` (itself in the middle), x fastest, then y, then z;
+  /// `outside` stands for those beyond the grid's sides in x or y.
+  void block(const CellCoord& c, int outside, std::array<int, 27>& out) const;
 
   /// Lab-frame faces of a cell: x ∈ [x_lower(ix), x_lower(ix + 1)), likewise y and z.
   /// The outermost x and y cells extend to infinity (spheres may overlap the side wall).
@@ -70,21 +73,27 @@ inline int CellGrid::index(const CellCoord& c) const {
   return (iz * n_xy_ + c.iy) * n_xy_ + c.ix;
 }
 
-inline int CellGrid::neighbours(const CellCoord& c, std::array<int, 27>& out) const {
+inline void CellGrid::block(const CellCoord& c, int outside, std::array<int, 27>& out) const {
   // The three layers wrapped once, not each cell: integer divisions are slow.
   const int layer = index({0, 0, c.iz});
   const int layer_size = n_xy_ * n_xy_, period = n_z_ * layer_size;
   const std::array<int, 3> layers{layer == 0 ? period - layer_size : layer - layer_size, layer,
                                   layer + layer_size == period ? 0 : layer + layer_size};
-  int count = 0;
+  int k = 0;
   for (const int z_offset : layers) {
-    for (int iy = std::max(0, c.iy - 1); iy <= std::min(n_xy_ - 1, c.iy + 1); ++iy) {
-      for (int ix = std::max(0, c.ix - 1); ix <= std::min(n_xy_ - 1, c.ix + 1); ++ix) {
-        out[count++] = z_offset + iy * n_xy_ + ix;
+    for (int iy = c.iy - 1; iy <= c.iy + 1; ++iy) {
+      for (int ix = c.ix - 1; ix <= c.ix + 1; ++ix) {
+        const bool inside = ix >= 0 && ix < n_xy_ && iy >= 0 && iy < n_xy_;
+        out[k++] = inside ? z_offset + iy * n_xy_ + ix : outside;
       }
     }
   }
-  return count;
+}
+
+inline int CellGrid::neighbours(const CellCoord& c, std::array<int, 27>& out) const {
+  constexpr int outside = -1;
+  block(c, outside, out);
+  return static_cast<int>(std::remove(out.begin(), out.end(), outside) - out.begin());
 }
 
 /// Particles binned by cell with a counting sort: the particles of cell c are

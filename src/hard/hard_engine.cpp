@@ -252,22 +252,17 @@ double HardEngine::max_overlap_m() const {
 // Prediction
 
 bool HardEngine::is_current(const Event& e) const {
-  switch (e.kind) {
-    case EventKind::sphere_sphere:
-      return counter_[e.i] == e.count_i && counter_[e.j] == e.count_j;
-    case EventKind::side_wall:
-    case EventKind::cell_crossing:
-    case EventKind::host_check:
-      return counter_[e.i] == e.count_i;
-    case EventKind::host_margin:
-    case EventKind::bottom_cap:
-    case EventKind::top_cap:
-    case EventKind::rider:
-      return counter_[e.i] == e.count_i && host_stamp_[e.i] == e.count_j;
-    case EventKind::bed_release:
-      break;
-  }
-  return host_epoch_ == e.count_j;
+  if (e.kind == EventKind::bed_release) return host_epoch_ == e.count_j;
+  // Where count_j came from, chosen without a jump table (its jumps mispredict).
+  constexpr unsigned host_stamped = 1u << static_cast<unsigned>(EventKind::bottom_cap) |
+                                    1u << static_cast<unsigned>(EventKind::top_cap) |
+                                    1u << static_cast<unsigned>(EventKind::rider) |
+                                    1u << static_cast<unsigned>(EventKind::host_margin);
+  const bool stamped = (host_stamped >> static_cast<unsigned>(e.kind)) & 1u;
+  const std::uint32_t& second = e.kind == EventKind::sphere_sphere ? counter_[e.j]
+                                : stamped                          ? host_stamp_[e.i]
+                                                                   : e.count_j;
+  return (counter_[e.i] == e.count_i) & (second == e.count_j);
 }
 
 void HardEngine::predict(int i, std::span<const int> new_cells) {

@@ -79,12 +79,17 @@ inline void CellGrid::block(const CellCoord& c, int outside, std::array<int, 27>
   const int layer_size = n_xy_ * n_xy_, period = n_z_ * layer_size;
   const std::array<int, 3> layers{layer == 0 ? period - layer_size : layer - layer_size, layer,
                                   layer + layer_size == period ? 0 : layer + layer_size};
+  std::array<bool, 3> row_inside{}, column_inside{};
+  for (int d = 0; d < 3; ++d) {
+    row_inside[d] = c.iy - 1 + d >= 0 && c.iy - 1 + d < n_xy_;
+    column_inside[d] = c.ix - 1 + d >= 0 && c.ix - 1 + d < n_xy_;
+  }
   int k = 0;
   for (const int z_offset : layers) {
-    for (int iy = c.iy - 1; iy <= c.iy + 1; ++iy) {
-      for (int ix = c.ix - 1; ix <= c.ix + 1; ++ix) {
-        const bool inside = ix >= 0 && ix < n_xy_ && iy >= 0 && iy < n_xy_;
-        out[k++] = inside ? z_offset + iy * n_xy_ + ix : outside;
+    for (int dy = 0; dy < 3; ++dy) {
+      for (int dx = 0; dx < 3; ++dx) {
+        const int cell = z_offset + (c.iy - 1 + dy) * n_xy_ + c.ix - 1 + dx;
+        out[k++] = row_inside[dy] & column_inside[dx] ? cell : outside;
       }
     }
   }

@@ -132,7 +132,11 @@ Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {
 }
 
 HostState HardEngine::host_now() const {
-  if (host_now_.t_s != t_s_ || host_now_.epoch != host_epoch_) host_now_ = {t_s_, host_epoch_, host_.at(t_s_)};
+  // A host that cannot move (speed bound 0: fixed walls) is where it was: its trig need
+  // not be evaluated at every instant.
+  const bool moved = host_now_.t_s != t_s_ && (host_.speed_bound_m_s() > 0.0 || host_now_.t_s == -never);
+  const bool stale = host_now_.epoch != host_epoch_ || moved;
+  if (stale) host_now_ = {t_s_, host_epoch_, host_.at(t_s_)};
   return host_now_.state;
 }
 

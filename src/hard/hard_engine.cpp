@@ -5,6 +5,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <sstream>
+#include <tuple>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
@@ -47,7 +48,6 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       fastest_host_rate_1_s_(std::max(scenario.excitation.angular_frequency_rad_s(),
                                       std::sqrt(scenario.host.stiffness_N_m / scenario.host.mass_kg))),
       particles_(initial),
-      t_ref_s_(initial.size(), 0.0),
       counter_(initial.size(), 0),
       cell_(initial.size()),
       around_(initial.size()),
@@ -61,9 +61,11 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
-      free_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
+      free_cells_(grid_.cell_count() + 1, static_cast<int>(initial.size())),  // + enter_cell's empty stand-in
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       queue_(static_cast<int>(initial.size())),
+      neighbours_(initial.size() + CellMembers::copy_width),
+      meeting_pairs_(initial.size()),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
@@ -73,7 +75,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
   stall_limit_ = 1000 * static_cast<std::int64_t>(initial.size()) + 100000;
   // A bed settled with soft contacts overlaps by a tiny fraction of a radius: the hard
   // engine starts from it with the spheres pushed just apart.
-  separation_m_ = separate_overlaps(particles_, scenario.cavity, host_.at(0.0).z_m);
+  Particles separated = initial;
+  separation_m_ = separate_overlaps(separated, scenario.cavity, host_.at(0.0).z_m);
+  particles_.assign(separated);
   const int n = static_cast<int>(particles_.size());
   for (int i = 0; i < n; ++i) {
     enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
@@ -128,7 +132,11 @@ Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {
 }
 
 HostState HardEngine::host_now() const {
-  if (host_now_.t_s != t_s_ || host_now_.epoch != host_epoch_) host_now_ = {t_s_, host_epoch_, host_.at(t_s_)};
+  // A host that cannot move (speed bound 0: fixed walls) is where it was: its trig need
+  // not be evaluated at every instant.
+  const bool moved = host_now_.t_s != t_s_ && (host_.speed_bound_m_s() > 0.0 || host_now_.t_s == -never);
+  const bool stale = host_now_.epoch != host_epoch_ || moved;
+  if (stale) host_now_ = {t_s_, host_epoch_, host_.at(t_s_)};
   return host_now_.state;
 }
 
@@ -136,11 +144,11 @@ void HardEngine::bring_to_now(int i) {
   const Ballistic f = flight(i);
   particles_.position_m.col(i) = f.position_at(t_s_, gravity_m_s2_);
   particles_.velocity_m_s.col(i) = f.velocity_at(t_s_, gravity_m_s2_);
-  t_ref_s_[i] = t_s_;
+  particles_.t_ref_s[i] = t_s_;
 }
 
 State HardEngine::state() const {
-  State s{observe(), particles_};
+  State s{observe(), particles_.unpacked()};
   const HostState host = s.observation.host;
   for (Eigen::Index i = 0; i < particles_.size(); ++i) {
     const int k = static_cast<int>(i);
@@ -249,25 +257,20 @@ double HardEngine::max_overlap_m() const {
 // Prediction
 
 bool HardEngine::is_current(const Event& e) const {
-  switch (e.kind) {
-    case EventKind::sphere_sphere:
-      return counter_[e.i] == e.count_i && counter_[e.j] == e.count_j;
-    case EventKind::side_wall:
-    case EventKind::cell_crossing:
-    case EventKind::host_check:
-      return counter_[e.i] == e.count_i;
-    case EventKind::host_margin:
-    case EventKind::bottom_cap:
-    case EventKind::top_cap:
-    case EventKind::rider:
-      return counter_[e.i] == e.count_i && host_stamp_[e.i] == e.count_j;
-    case EventKind::bed_release:
-      break;
-  }
-  return host_epoch_ == e.count_j;
+  if (e.kind == EventKind::bed_release) return host_epoch_ == e.count_j;
+  // Where count_j came from, chosen without a jump table (its jumps mispredict).
+  constexpr unsigned host_stamped = 1u << static_cast<unsigned>(EventKind::bottom_cap) |
+                                    1u << static_cast<unsigned>(EventKind::top_cap) |
+                                    1u << static_cast<unsigned>(EventKind::rider) |
+                                    1u << static_cast<unsigned>(EventKind::host_margin);
+  const bool stamped = (host_stamped >> static_cast<unsigned>(e.kind)) & 1u;
+  const std::uint32_t& second = e.kind == EventKind::sphere_sphere ? counter_[e.j]
+                                : stamped                          ? host_stamp_[e.i]
+                                                                   : e.count_j;
+  return (counter_[e.i] == e.count_i) & (second == e.count_j);
 }
 
-void HardEngine::predict(int i) {
+void HardEngine::predict(int i, std::span<const int> new_cells) {
   const double t = t_s_;
   const Ballistic f = flight(i);
   const Eigen::Vector3d x = f.position_at(t, gravity_m_s2_), v = f.velocity_at(t, gravity_m_s2_);
@@ -275,7 +278,8 @@ void HardEngine::predict(int i) {
   const CellCoord c = cell_[i];
   const Eigen::Vector3d& g = gravity_m_s2_;
 
-  // The next face crossing bounds every other prediction: the sphere is predicted anew there.
+  // The next face crossing bounds the predictions of walls and host: the sphere is
+  // predicted anew there.
   double crossing = never;
   int face = -1;
   const std::array<int, 3> index{c.ix, c.iy, c.iz};
@@ -296,19 +300,27 @@ void HardEngine::predict(int i) {
   t_cross_s_[i] = horizon;
   if (face >= 0) push({horizon, i, face, counter_[i], 0, EventKind::cell_crossing});
 
-  // The spheres around first, then their contact times in one loop that does not wait
-  // on walking the cells' lists.
-  const Around& around = around_[i];
-  neighbours_.clear();
-  for (int k = 0; k < around.count; ++k) {
-    free_cells_.for_each_in(around.cells[k], [&](int j) {
-      if (j != i) neighbours_.push_back(j);
-    });
-  }
-  for (const int j : neighbours_) {
+  // The spheres in the new cells first, then which of them i meets, without branches (i
+  // itself does not: it neither approaches nor recedes), then only those spheres'
+  // contact times, however late: a contact is exact whichever cells the two are in.
+  int* const candidates = neighbours_.data();
+  int candidate_count = 0;
+  for (const int cell : new_cells) candidate_count += free_cells_.copy_members(cell, candidates + candidate_count);
+  // Among many spheres the records are cache misses: ask for all of them at once.
+  for (int k = 0; k < candidate_count; ++k) __builtin_prefetch(&particles_.record(candidates[k]));
+  int meeting_count = 0;
+  for (int k = 0; k < candidate_count; ++k) {
+    const int j = candidates[k];
     const Ballistic fj = flight(j);
-    const double s = sphere_sphere_time(x - fj.position_at(t, g), v - fj.velocity_at(t, g), r + particles_.radius_m[j]);
-    if (t + s < horizon) push({t + s, i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
+    const double contact = r + particles_.radius_m[j];
+    const PairQuadratic pair = PairQuadratic::of(x - fj.position_at(t, g), v - fj.velocity_at(t, g), contact);
+    candidates[meeting_count] = j;
+    meeting_pairs_[meeting_count] = pair;
+    meeting_count += pair.meets(contact);
+  }
+  for (int k = 0; k < meeting_count; ++k) {
+    const int j = candidates[k];
+    push({t + meeting_pairs_[k].time_s(), i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
   }
 
   // The side wall, if any point of the cell is within reach of it.
@@ -374,8 +386,12 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   // A margin is reached whichever way the sphere moves: a sphere within it but receding
   // can still be caught by a host that strays by less than the margin.
   const double closing = margin_m > 0.0 ? within_margin : min_approach_speed_m_s;
+  // A tie goes to a contact, then to the lower kind and partner: a sphere wedged in a bed
+  // touches several riders at once, and the cells may list them in any order.
   auto consider = [&](const Approach& a, EventKind kind, int partner) {
-    if (a.t_s < best.when.t_s || (a.contact && !best.when.contact && a.t_s == best.when.t_s)) best = {a, kind, partner};
+    const bool wins_tie = a.t_s == best.when.t_s && a.contact &&
+                          (!best.when.contact || std::tie(kind, partner) < std::tie(best.kind, best.partner));
+    if (a.t_s < best.when.t_s || wins_tie) best = {a, kind, partner};
   };
   const double height = cavity_.height_m();
   const HostState host = host_now();
@@ -843,13 +859,21 @@ void HardEngine::cross_face(int i, Face face) {
   }
   free_cells_.remove(i);
   enter_cell(i, c);
-  predict(i);
+  // Only the layer of cells beyond the face is new around i: its contacts with the
+  // spheres in the others were predicted with the same trajectory.
+  constexpr std::array<int, 3> stride{1, 3, 9};  // in Around, of x, y and z
+  const int axis = face / 2, beyond = (face % 2 == 1 ? 2 : 0) * stride[axis];
+  const int u_stride = stride[(axis + 1) % 3], w_stride = stride[(axis + 2) % 3];
+  std::array<int, 9> entered{};
+  for (int u = 0; u < 3; ++u) {
+    for (int w = 0; w < 3; ++w) entered[3 * u + w] = around_[i][beyond + u * u_stride + w * w_stride];
+  }
+  predict(i, entered);
 }
 
 void HardEngine::enter_cell(int i, const CellCoord& c) {
   cell_[i] = c;
-  Around& a = around_[i];
-  a.count = grid_.neighbours(c, a.cells);
+  grid_.block(c, grid_.cell_count(), around_[i]);  // the empty stand-in beyond the sides
   free_cells_.insert(i, grid_.index(c));
 }
 
@@ -979,7 +1003,7 @@ void HardEngine::detach(int i, const HostState& host) {
   new_trajectory(i);
   particles_.position_m.col(i) += host.z_m * e_z;
   particles_.velocity_m_s.col(i) = host.v_m_s * e_z;
-  t_ref_s_[i] = t_s_;
+  particles_.t_ref_s[i] = t_s_;
   enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
   --riding_count_;
   riding_mass_kg_ = riding_count_ > 0 ? riding_mass_kg_ - particles_.mass_kg[i] : 0.0;

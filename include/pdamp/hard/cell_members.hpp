@@ -1,34 +1,59 @@
 #pragma once
 /// Which particles are in which cell, for a population that changes one particle at a
-/// time (a sphere crossing a face, coming to rest, lifting off): an intrusive doubly
-/// linked list per cell, O(1) to insert, remove or move, no allocation after construction.
+/// time (a sphere crossing a face, coming to rest, lifting off): O(1) to insert, remove
+/// or move, no allocation after construction.
+///
+/// A cell keeps its first `inline_capacity` members in 16 bytes with their count, and
+/// any further ones in an intrusive doubly linked list. A gas holds about one sphere per
+/// cell and a dense bed rarely more than three, so `copy_members` gathers a cell with one
+/// 16-byte copy and without walking a list: the number of members is a coin toss that a
+/// loop over them would mispredict.
 
+#include <algorithm>
+#include <array>
+#include <cstring>
 #include <vector>
 
 namespace pdamp::hard {
 
 class CellMembers {
  public:
+  static constexpr int inline_capacity = 3;
+
   CellMembers(int cell_count, int particle_count)
-      : head_(cell_count, none), next_(particle_count, none), prev_(particle_count, none),
+      : cells_(cell_count), overflow_(cell_count, none), next_(particle_count, none), prev_(particle_count, none),
         cell_(particle_count, none) {}
 
   void insert(int particle, int cell) {
     cell_[particle] = cell;
-    prev_[particle] = none;
-    next_[particle] = head_[cell];
-    if (head_[cell] != none) prev_[head_[cell]] = particle;
-    head_[cell] = particle;
+    Cell& c = cells_[cell];
+    if (c.count < inline_capacity) {
+      c.members[c.count] = particle;
+    } else {
+      int& head = overflow_[cell];
+      prev_[particle] = none;
+      next_[particle] = head;
+      if (head != none) prev_[head] = particle;
+      head = particle;
+    }
+    ++c.count;
   }
   void remove(int particle) {
     const int cell = cell_[particle];
-    if (prev_[particle] != none) {
-      next_[prev_[particle]] = next_[particle];
-    } else {
-      head_[cell] = next_[particle];
-    }
-    if (next_[particle] != none) prev_[next_[particle]] = prev_[particle];
+    Cell& c = cells_[cell];
     cell_[particle] = none;
+    int* const inline_end = c.members.data() + std::min(c.count, inline_capacity);
+    int* const slot = std::find(c.members.data(), inline_end, particle);
+    --c.count;
+    if (slot == inline_end) {
+      unlink_overflow(cell, particle);
+    } else if (overflow_[cell] != none) {
+      // The first overflow member takes the freed slot: the inline members stay the first.
+      *slot = overflow_[cell];
+      unlink_overflow(cell, *slot);
+    } else {
+      *slot = c.members[c.count];
+    }
   }
   void move(int particle, int cell) {
     remove(particle);
@@ -37,12 +62,43 @@ class CellMembers {
   bool contains(int particle) const { return cell_[particle] != none; }
   template <class Visit>
   void for_each_in(int cell, Visit visit) const {
-    for (int p = head_[cell]; p != none; p = next_[p]) visit(p);
+    const Cell& c = cells_[cell];
+    for (int k = 0; k < std::min(c.count, inline_capacity); ++k) visit(c.members[k]);
+    for (int p = overflow_[cell]; p != none; p = next_[p]) visit(p);
   }
+  /// Writes the members of `cell` to `out` and returns how many there are; `out` must
+  /// have room for them and for at least `copy_width` entries.
+  int copy_members(int cell, int* out) const {
+    const Cell& c = cells_[cell];
+    std::memcpy(out, &c, sizeof(Cell));  // the members, then junk beyond them
+    if (c.count > inline_capacity) {
+      int k = inline_capacity;
+      for (int p = overflow_[cell]; p != none; p = next_[p]) out[k++] = p;
+    }
+    return c.count;
+  }
+  static constexpr int copy_width = 4;
 
  private:
   static constexpr int none = -1;
-  std::vector<int> head_, next_, prev_, cell_;
+  struct alignas(16) Cell {
+    std::array<int, inline_capacity> members{};
+    int count = 0;
+  };
+  static_assert(sizeof(Cell) == copy_width * sizeof(int));
+  void unlink_overflow(int cell, int particle) {
+    if (prev_[particle] != none) {
+      next_[prev_[particle]] = next_[particle];
+    } else {
+      overflow_[cell] = next_[particle];
+    }
+    if (next_[particle] != none) prev_[next_[particle]] = prev_[particle];
+  }
+
+  std::vector<Cell> cells_;
+  std::vector<int> overflow_;     ///< each cell's first member beyond the inline ones
+  std::vector<int> next_, prev_;  ///< the overflow lists
+  std::vector<int> cell_;
 };
 
 }  // namespace pdamp::hard

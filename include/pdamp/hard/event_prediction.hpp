@@ -53,20 +53,38 @@ inline double time_to_close(double gap, double rate, double accel) {
   return (rate + std::sqrt(rate * rate - 2.0 * accel * gap)) / -accel;
 }
 
+/// The contact test of two spheres whose centres are dx = x_i − x_j apart and move with
+/// dv = v_i − v_j: |dx + dv s|² = σ² reads c + 2 b s + |dv|² s² = 0.
+struct PairQuadratic {
+  double b = 0.0;             ///< dx·dv: < 0 while they approach
+  double c = 0.0;             ///< |dx|² − σ²: ≤ 0 if they touch or overlap
+  double discriminant = 0.0;  ///< b² − |dv|² c: < 0 if they miss each other
+
+  /// From the components of dx and dv (written out, so that a loop over pairs vectorises).
+  static PairQuadratic of(double dx, double dy, double dz, double dvx, double dvy, double dvz,
+                          double contact_distance_m) {
+    const double b = (dx * dvx + dy * dvy) + dz * dvz;
+    const double c = ((dx * dx + dy * dy) + dz * dz) - contact_distance_m * contact_distance_m;
+    return {b, c, b * b - ((dvx * dvx + dvy * dvy) + dvz * dvz) * c};
+  }
+  static PairQuadratic of(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m) {
+    return of(dx.x(), dx.y(), dx.z(), dv.x(), dv.y(), dv.z(), contact_distance_m);
+  }
+  /// Whether they approach and meet (or already overlap). Free of branches: whether a
+  /// neighbour approaches is a coin toss, and a mispredicted branch costs more than the test.
+  bool meets(double contact_distance_m) const {
+    return (b < -min_approach_speed_m_s * contact_distance_m) & ((c <= 0) | (discriminant >= 0));
+  }
+  /// When they meet (0 if they overlap), given meets().
+  double time_s() const { return c <= 0 ? 0.0 : c / (std::sqrt(discriminant) - b); }  // the smaller root, without cancellation
+};
+
 /// The first s ≥ 0 at which two spheres, centres dx = x_i − x_j apart moving with
 /// dv = v_i − v_j, come within `contact_distance_m`; 0 if they already overlap and
 /// approach; `never` if they do not meet.
-///
-/// Free of branches: whether a neighbour approaches is a coin toss, and mispredicted
-/// branches cost more than always taking the square root and the quotient.
 inline double sphere_sphere_time(const Eigen::Vector3d& dx, const Eigen::Vector3d& dv, double contact_distance_m) {
-  const double b = dx.dot(dv);
-  const double c = dx.squaredNorm() - contact_distance_m * contact_distance_m;
-  const double discriminant = b * b - dv.squaredNorm() * c;
-  const double root = c / (std::sqrt(discriminant) - b);  // NaN if they miss: discarded below
-  const double meeting = discriminant < 0 ? never : root;
-  const double unless_overlapping = c <= 0 ? 0.0 : meeting;
-  return b >= -min_approach_speed_m_s * contact_distance_m ? never : unless_overlapping;
+  const PairQuadratic pair = PairQuadratic::of(dx, dv, contact_distance_m);
+  return pair.meets(contact_distance_m) ? pair.time_s() : never;
 }
 
 /// A closing rate for `earliest_contact` that makes it report the first time the gap is

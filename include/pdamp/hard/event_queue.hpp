@@ -18,6 +18,7 @@
 #include <boost/heap/d_ary_heap.hpp>
 #include <cstdint>
 #include <optional>
+#include <stdexcept>
 #include <vector>
 
 namespace pdamp::hard {
@@ -43,20 +44,28 @@ struct Event {
   EventKind kind;
 };
 
+/// The order of events at one time, by kind, then particle, then partner, packed into one
+/// number (i + 1 and j below 2^29, see EventQueue::max_particles).
+inline std::uint64_t tie_key(const Event& e) {
+  return (static_cast<std::uint64_t>(e.kind) << 58) | (static_cast<std::uint64_t>(e.i + 1) << 29) |
+         static_cast<std::uint64_t>(e.j);
+}
+
 /// Strict order on time; ties broken by kind and particles so the order never depends on
 /// the queue's internals (determinism).
 inline bool earlier(const Event& a, const Event& b) {
   if (a.t_s != b.t_s) return a.t_s < b.t_s;
-  if (a.kind != b.kind) return a.kind < b.kind;
-  if (a.i != b.i) return a.i < b.i;
-  return a.j < b.j;
+  return tie_key(a) < tie_key(b);
 }
 
 class EventQueue {
  public:
   /// Owners 0 … particle_count − 1 are the spheres; events with i < 0 belong to the host.
   explicit EventQueue(int particle_count)
-      : lists_(particle_count + 1), handle_(particle_count + 1), dirty_flag_(particle_count + 1, 0) {}
+      : lists_(particle_count + 1), handle_(particle_count + 1), dirty_flag_(particle_count + 1, 0) {
+    if (particle_count > max_particles) throw std::length_error("the event queue orders at most 2^29 - 2 spheres");
+  }
+  static constexpr int max_particles = (1 << 29) - 2;
 
   void push(const Event& event) {
     const int owner = owner_of(event);
@@ -97,11 +106,15 @@ class EventQueue {
  private:
   struct Entry {
     Event event;          ///< the owner's earliest event (a copy, so that the heap compares entries alone)
+    std::uint64_t tie;    ///< its tie_key
     std::uint32_t index;  ///< its position in the owner's list
   };
-  /// Boost.Heap puts the greatest element on top; here that is the earliest event.
+  /// Boost.Heap puts the greatest element on top; here that is the earliest event. Free
+  /// of branches (`earlier`, with the tie key at hand): sifting compares coin tosses.
   struct Later {
-    bool operator()(const Entry& a, const Entry& b) const { return earlier(b.event, a.event); }
+    bool operator()(const Entry& a, const Entry& b) const {
+      return (b.event.t_s < a.event.t_s) | ((b.event.t_s == a.event.t_s) & (b.tie < a.tie));
+    }
   };
   /// Mutable, for re-keying an owner in place. Measured on pdamp_bench (N = 1,000): as fast
   /// as arities 2 and 8 and the hand-written 4-ary heap it replaced (within ~3 %);
@@ -135,7 +148,7 @@ class EventQueue {
       handle.reset();
       return;
     }
-    const Entry entry{list[best], static_cast<std::uint32_t>(best)};
+    const Entry entry{list[best], tie_key(list[best]), static_cast<std::uint32_t>(best)};
     if (handle) {
       heap_.update(*handle, entry);
     } else {

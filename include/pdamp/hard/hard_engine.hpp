@@ -35,6 +35,7 @@
 
 #include <array>
 #include <optional>
+#include <span>
 #include <cstdint>
 #include <vector>
 
@@ -42,6 +43,7 @@
 #include "pdamp/hard/collision_rules.hpp"
 #include "pdamp/hard/event_prediction.hpp"
 #include "pdamp/hard/event_queue.hpp"
+#include "pdamp/hard/packed_particles.hpp"
 #include "pdamp/hard/particle_set.hpp"
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/cell_grid.hpp"
@@ -77,7 +79,7 @@ class HardEngine final : public Engine {
   enum Face : int { x_lower, x_upper, y_lower, y_upper, z_lower, z_upper };
 
   Ballistic flight(int i) const {
-    return {particles_.position_m.col(i), particles_.velocity_m_s.col(i), t_ref_s_[i]};
+    return {particles_.position_m.col(i), particles_.velocity_m_s.col(i), particles_.t_ref_s[i]};
   }
   /// Lab-frame position of any sphere now (free or riding).
   Eigen::Vector3d position_now(int i, const HostState& host) const;
@@ -97,7 +99,11 @@ class HardEngine final : public Engine {
 
   // Prediction.
   void push(const Event& event) { queue_.push(event); }
-  void predict(int i);
+  /// Predicts every event of free sphere i anew (its trajectory changed).
+  void predict(int i) { predict(i, around_[i]); }
+  /// Predicts sphere i's events anew, but its contacts only with the spheres in
+  /// `new_cells` (it has just crossed into a cell whose other neighbours it already had).
+  void predict(int i, std::span<const int> new_cells);
   /// Predicts free sphere i's host-dependent event, starting the descent through the
   /// tiers at `first_level` (a tier it is in: the levels above it are known to hold it).
   void predict_host_relative(int i, std::size_t first_level = 0);
@@ -163,16 +169,14 @@ class HardEngine final : public Engine {
 
   // Spheres: free ones hold lab position and velocity at t_ref; riding ones hold their
   // host-frame position (lab position minus z_host e_z).
-  Particles particles_;
-  std::vector<double> t_ref_s_;
+  PackedParticles particles_;
   std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
-  /// The cells around each free sphere's cell (itself included), kept because every
-  /// prediction needs them and working them out costs two integer divisions per cell.
-  struct Around {
-    std::array<int, 27> cells;
-    int count;
-  };
+  /// The 3 × 3 × 3 cells around each free sphere's cell (CellGrid::block), kept because
+  /// every prediction needs them. Beyond the grid's sides an empty cell stands in, so that
+  /// gathering the neighbours is a loop of fixed length and the layer entered at a face
+  /// crossing is at fixed places.
+  using Around = std::array<int, 27>;
   std::vector<Around> around_;
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
@@ -210,6 +214,7 @@ class HardEngine final : public Engine {
   CellMembers rider_cells_;  ///< riding spheres by host-frame cell
   EventQueue queue_;
   std::vector<int> neighbours_;  ///< predict's scratch: the free spheres around the one predicted
+  std::vector<PairQuadratic> meeting_pairs_;  ///< predict's scratch: the contact tests of those it meets
   double contact_tolerance_m_;
   double max_radius_m_;
   double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart

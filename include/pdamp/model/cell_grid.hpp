@@ -40,6 +40,9 @@ class CellGrid {
 
   /// The distinct cells within one cell of `c` (itself included); returns how many.
   int neighbours(const CellCoord& c, std::array<int, 27>& out) const;
+  /// The 3 × 3 × 3 cells around `c` (itself in the middle), x fastest, then y, then z;
+  /// `outside` stands for those beyond the grid's sides in x or y.
+  void block(const CellCoord& c, int outside, std::array<int, 27>& out) const;
 
   /// Lab-frame faces of a cell: x ∈ [x_lower(ix), x_lower(ix + 1)), likewise y and z.
   /// The outermost x and y cells extend to infinity (spheres may overlap the side wall).
@@ -70,16 +73,32 @@ inline int CellGrid::index(const CellCoord& c) const {
   return (iz * n_xy_ + c.iy) * n_xy_ + c.ix;
 }
 
-inline int CellGrid::neighbours(const CellCoord& c, std::array<int, 27>& out) const {
-  int count = 0;
-  for (int dz = -1; dz <= 1; ++dz) {
-    for (int iy = std::max(0, c.iy - 1); iy <= std::min(n_xy_ - 1, c.iy + 1); ++iy) {
-      for (int ix = std::max(0, c.ix - 1); ix <= std::min(n_xy_ - 1, c.ix + 1); ++ix) {
-        out[count++] = index({ix, iy, c.iz + dz});
+inline void CellGrid::block(const CellCoord& c, int outside, std::array<int, 27>& out) const {
+  // The three layers wrapped once, not each cell: integer divisions are slow.
+  const int layer = index({0, 0, c.iz});
+  const int layer_size = n_xy_ * n_xy_, period = n_z_ * layer_size;
+  const std::array<int, 3> layers{layer == 0 ? period - layer_size : layer - layer_size, layer,
+                                  layer + layer_size == period ? 0 : layer + layer_size};
+  std::array<bool, 3> row_inside{}, column_inside{};
+  for (int d = 0; d < 3; ++d) {
+    row_inside[d] = c.iy - 1 + d >= 0 && c.iy - 1 + d < n_xy_;
+    column_inside[d] = c.ix - 1 + d >= 0 && c.ix - 1 + d < n_xy_;
+  }
+  int k = 0;
+  for (const int z_offset : layers) {
+    for (int dy = 0; dy < 3; ++dy) {
+      for (int dx = 0; dx < 3; ++dx) {
+        const int cell = z_offset + (c.iy - 1 + dy) * n_xy_ + c.ix - 1 + dx;
+        out[k++] = row_inside[dy] & column_inside[dx] ? cell : outside;
       }
     }
   }
-  return count;
+}
+
+inline int CellGrid::neighbours(const CellCoord& c, std::array<int, 27>& out) const {
+  constexpr int outside = -1;
+  block(c, outside, out);
+  return static_cast<int>(std::remove(out.begin(), out.end(), outside) - out.begin());
 }
 
 /// Particles binned by cell with a counting sort: the particles of cell c are

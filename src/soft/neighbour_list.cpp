@@ -43,7 +43,7 @@ void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const
   // Hand over: mark i's kept partners, look up the new pairs, unmark.
   // Free a buffer that must grow before refilling it: assign would hold both at once.
   if (history_.capacity() < partner_.size()) history_ = {};
-  history_.assign(partner_.size(), ContactHistory{});
+  history_.assign(partner_.size(), ContactHistory<>{});
   touching_.assign(partner_.size(), 0);
   old_slot_.assign(n, -1);
   for (int i = 0; i < n; ++i) {

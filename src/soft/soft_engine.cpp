@@ -1,5 +1,8 @@
 #include "pdamp/soft/soft_engine.hpp"
 
+#include <omp.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -46,7 +49,7 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
     inv_mass_[i] = 1.0 / mass_[i];
     inv_inertia_[i] = 1.0 / initial.moment_of_inertia(k);
   }
-  for (auto& walls : wall_history_) walls.assign(n, ContactHistory{});
+  for (auto& walls : wall_history_) walls.assign(n, ContactHistory<>{});
   for (auto& walls : wall_touching_) walls.assign(n, 0);
 
   host_ = host_model_.initial_state();
@@ -157,6 +160,12 @@ void SoftEngine::refresh_neighbours() {
   reactions_.assign(neighbours_.size(), Wrench{});
   x_at_rebuild_ = x_;
   host_z_at_rebuild_ = host_.z_m;
+  const int n = static_cast<int>(x_.size());
+  most_pairs_in_a_chunk_ = 0;
+  for (int first = 0; first < n; first += chunk_size) {
+    const int pairs = neighbours_.first(std::min(n, first + chunk_size)) - neighbours_.first(first);
+    most_pairs_in_a_chunk_ = std::max(most_pairs_in_a_chunk_, pairs);
+  }
 }
 
 void SoftEngine::compute_forces(double dt_s) {
@@ -167,12 +176,28 @@ void SoftEngine::compute_forces(double dt_s) {
   const int n = static_cast<int>(x_.size());
   const int chunks = (n + chunk_size - 1) / chunk_size;
   chunk_totals_.resize(chunks);
+  pairs_to_evaluate_.resize(std::max<std::size_t>(pairs_to_evaluate_.size(), omp_get_max_threads()));
+  for (auto& pairs : pairs_to_evaluate_) {
+    if (pairs.size() < static_cast<std::size_t>(most_pairs_in_a_chunk_)) pairs.resize(most_pairs_in_a_chunk_);
+  }
 #pragma omp parallel for schedule(static) if (n >= parallel_minimum)
   for (int c = 0; c < chunks; ++c) {
+    const int first = c * chunk_size, end = std::min(n, first + chunk_size);
+    Wrench on_chunk[chunk_size];
+    // The pairs to evaluate are sifted out first, without a branch, and evaluated two at
+    // a time in SIMD lanes.
+    PairToEvaluate* pairs = pairs_to_evaluate_[omp_get_thread_num()].data();
+    int count = 0;
+    for (int i = first; i < end; ++i) {
+      on_chunk[i - first] = start_forces(i);
+      count = list_pairs_to_evaluate(i, pairs, count);
+    }
     ChunkTotals totals;
-    for (int i = c * chunk_size; i < std::min(n, (c + 1) * chunk_size); ++i) {
-      Wrench on_i = start_forces(i);
-      add_particle_contacts(i, dt_s, totals, on_i);
+    int evaluated = 0;
+    for (; evaluated + 1 < count; evaluated += 2) add_pair_contacts<Lanes>(pairs + evaluated, dt_s, first, totals, on_chunk);
+    if (evaluated < count) add_pair_contacts<double>(pairs + evaluated, dt_s, first, totals, on_chunk);
+    for (int i = first; i < end; ++i) {
+      Wrench& on_i = on_chunk[i - first];
       add_wall_contacts(i, dt_s, totals, on_i);
       force_[i] = on_i.force_N;
       torque_[i] = on_i.torque_N_m;
@@ -209,34 +234,62 @@ void SoftEngine::ChunkTotals::record_contact(double overlap_m, double radius_m) 
   max_overlap_ratio = std::max(max_overlap_ratio, overlap_m / radius_m);
 }
 
-void SoftEngine::add_particle_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i) {
-  const SoftContactLaw& law = scenario_.soft_particle;
+int SoftEngine::list_pairs_to_evaluate(int i, PairToEvaluate* out, int count) const {
   const Eigen::Vector3d xi = x_[i];
   const double ri = radius_[i];
   for (int k = neighbours_.first(i); k < neighbours_.first(i + 1); ++k) {
     const int j = neighbours_.partner(k);
-    const Eigen::Vector3d d = xi - x_[j];
     const double reach = ri + radius_[j];
-    const double distance_sq = d.squaredNorm();
-    if (distance_sq >= reach * reach && !neighbours_.touching(k)) continue;
-    const double distance = std::sqrt(distance_sq);
-    // The contact point splits the centre distance in the ratio of the radii, so the
-    // lever arms add up to the distance and angular momentum is conserved exactly.
-    const double share = distance / reach, lever_i = ri * share, lever_j = radius_[j] * share;
-    const Eigen::Vector3d normal = d * (1.0 / distance);
-    const ContactKinematics contact{normal, reach - distance,
-                                    v_[i] - v_[j] - (lever_i * w_[i] + lever_j * w_[j]).cross(normal)};
-    const ContactForce c = evaluate_contact(law, contact, dt_s, neighbours_.history(k));
-    const Eigen::Vector3d twist = normal.cross(c.tangential_N);
-    on_i.force_N += c.force_N;
-    on_i.torque_N_m -= lever_i * twist;
-    reactions_[neighbours_.partner_slot(k)] = {-c.force_N, -lever_j * twist};
-    totals.impact_J += c.dissipated_normal_J;
-    totals.friction_J += c.dissipated_tangential_J;
-    totals.elastic_J += c.elastic_J;
-    const bool touching = contact.overlap_m > 0.0;
-    neighbours_.set_touching(k, touching);
-    if (touching) totals.record_contact(contact.overlap_m, std::min(ri, radius_[j]));
+    out[count] = {i, k};
+    count += ((xi - x_[j]).squaredNorm() < reach * reach) | neighbours_.touching(k);
+  }
+  return count;
+}
+
+template <class Real>
+void SoftEngine::add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int first, ChunkTotals& totals,
+                                   Wrench* on_chunk) {
+  constexpr int lanes = lane_count<Real>;
+  int i[lanes], j[lanes], k[lanes];
+  for (int l = 0; l < lanes; ++l) {
+    i[l] = pairs[l].owner;
+    k[l] = pairs[l].pair;
+    j[l] = neighbours_.partner(k[l]);
+  }
+  const Vec3<Real> d = gather3<Real>([&](int l) { return x_[i[l]]; }) - gather3<Real>([&](int l) { return x_[j[l]]; });
+  const Real ri = gather<Real>([&](int l) { return radius_[i[l]]; });
+  const Real rj = gather<Real>([&](int l) { return radius_[j[l]]; });
+  const Real reach = ri + rj;
+  const Real distance = sqrt_of(squared_norm(d));
+  // The contact point splits the centre distance in the ratio of the radii, so the
+  // lever arms add up to the distance and angular momentum is conserved exactly.
+  const Real share = distance / reach, lever_i = ri * share, lever_j = rj * share;
+  const Vec3<Real> normal = d * (1.0 / distance);
+  const Vec3<Real> spin_part = lever_i * gather3<Real>([&](int l) { return w_[i[l]]; }) +
+                               lever_j * gather3<Real>([&](int l) { return w_[j[l]]; });
+  const ContactKinematics<Real> contact{
+      normal, reach - distance,
+      gather3<Real>([&](int l) { return v_[i[l]]; }) - gather3<Real>([&](int l) { return v_[j[l]]; }) - cross(spin_part, normal)};
+  ContactHistory<Real> h{gather3<Real>([&](int l) { return neighbours_.history(k[l]).tangential_displacement_m; }),
+                         gather3<Real>([&](int l) { return neighbours_.history(k[l]).tangential_force_N; }),
+                         gather<Real>([&](int l) { return neighbours_.history(k[l]).normal_damping_force_N; })};
+  const ContactForce<Real> c = evaluate_contact(scenario_.soft_particle, contact, dt_s, h);
+  const Vec3<Real> twist = cross(normal, c.tangential_N);
+  const Vec3<Real> torque_on_i = lever_i * twist, torque_on_j = -lever_j * twist;
+  const auto touching = contact.overlap_m > 0.0;
+  for (int l = 0; l < lanes; ++l) {
+    neighbours_.history(k[l]) = {lane(h.tangential_displacement_m, l), lane(h.tangential_force_N, l),
+                                 lane(h.normal_damping_force_N, l)};
+    Wrench& on_i = on_chunk[i[l] - first];
+    const Eigen::Vector3d force = to_eigen(lane(c.force_N, l));
+    on_i.force_N += force;
+    on_i.torque_N_m -= to_eigen(lane(torque_on_i, l));
+    reactions_[neighbours_.partner_slot(k[l])] = {-force, to_eigen(lane(torque_on_j, l))};
+    totals.impact_J += lane(c.dissipated_normal_J, l);
+    totals.friction_J += lane(c.dissipated_tangential_J, l);
+    totals.elastic_J += lane(c.elastic_J, l);
+    neighbours_.set_touching(k[l], lane_is_set(touching, l));
+    if (lane_is_set(touching, l)) totals.record_contact(lane(contact.overlap_m, l), std::min(lane(ri, l), lane(rj, l)));
   }
 }
 
@@ -263,11 +316,12 @@ void SoftEngine::add_wall_contacts(int i, double dt_s, ChunkTotals& totals, Wren
     if (!near[wall] && !wall_touching_[wall][i]) continue;
     const WallGap gap = cavity_.gap(static_cast<Wall>(wall), x_[i], r, host_.z_m);
     const double lever = r + std::min(gap.gap_m, 0.0);  // the contact point is on the wall
-    const ContactKinematics contact{gap.normal, -gap.gap_m, v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity};
-    const ContactForce c = evaluate_contact(law, contact, dt_s, wall_history_[wall][i]);
-    on_i.force_N += c.force_N;
-    on_i.torque_N_m -= lever * gap.normal.cross(c.tangential_N);
-    totals.on_host_N -= c.force_N.z();
+    const ContactKinematics<double> contact{to_vec3(gap.normal), -gap.gap_m,
+                                            to_vec3(v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity)};
+    const ContactForce<double> c = evaluate_contact(law, contact, dt_s, wall_history_[wall][i]);
+    on_i.force_N += to_eigen(c.force_N);
+    on_i.torque_N_m -= lever * gap.normal.cross(to_eigen(c.tangential_N));
+    totals.on_host_N -= c.force_N.z;
     totals.impact_J += c.dissipated_normal_J;
     totals.friction_J += c.dissipated_tangential_J;
     totals.elastic_J += c.elastic_J;

@@ -32,7 +32,7 @@ class NeighbourList {
   /// from contiguous memory.)
   int partner_first(int j) const { return reverse_first_[j]; }
   int partner_slot(int k) const { return partner_slot_[k]; }
-  ContactHistory& history(int k) { return history_[k]; }
+  ContactHistory<>& history(int k) { return history_[k]; }
   /// Whether pair k was touching after the last force computation.
   bool touching(int k) const { return touching_[k] != 0; }
   void set_touching(int k, bool touching) { touching_[k] = touching; }
@@ -44,13 +44,13 @@ class NeighbourList {
   CellList cells_;
   Eigen::Matrix3Xd cell_positions_;
   std::vector<int> first_, partner_;
-  std::vector<ContactHistory> history_;
+  std::vector<ContactHistory<>> history_;
   std::vector<unsigned char> touching_;
   /// During a rebuild: the touching pairs' histories, by owner ([kept_first_[i],
   /// kept_first_[i + 1]) for particle i), and where partner j of the current i is kept, or −1.
   struct KeptHistory {
     int partner;
-    ContactHistory history;
+    ContactHistory<> history;
   };
   std::vector<KeptHistory> kept_;
   std::vector<int> kept_first_;

@@ -66,11 +66,19 @@ class SoftEngine final : public Engine {
   struct Wrench {
     Eigen::Vector3d force_N = Eigen::Vector3d::Zero(), torque_N_m = Eigen::Vector3d::Zero();
   };
-  // Inlined into the force pass so that a sphere's wrench and the chunk's totals stay in
-  // registers: the pass's stores (histories, reactions) might otherwise alias them and force
-  // a store and reload per contact.
+  /// A listed pair whose contact is evaluated this step: its owner and its index in the list.
+  struct PairToEvaluate {
+    int owner, pair;
+  };
+  // Inlined into the force pass so that the chunk's totals stay in registers: the pass's
+  // stores (histories, reactions) might otherwise alias them and force a store and reload
+  // per contact.
   [[gnu::always_inline]] inline Wrench start_forces(int i) const;
-  [[gnu::always_inline]] inline void add_particle_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i);
+  [[gnu::always_inline]] inline int list_pairs_to_evaluate(int i, PairToEvaluate* out, int count) const;
+  /// Evaluates lane_count<Real> pairs at once, adding to the wrenches `on_chunk[owner − first]`.
+  template <class Real>
+  [[gnu::always_inline]] inline void add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int first,
+                                                       ChunkTotals& totals, Wrench* on_chunk);
   [[gnu::always_inline]] inline void add_wall_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i);
   void add_reactions(int j);
 
@@ -94,11 +102,14 @@ class SoftEngine final : public Engine {
   /// gather adds every slot without asking which pairs touch.
   std::vector<Wrench> reactions_;
   std::vector<ChunkTotals> chunk_totals_;
+  /// Per thread: the pairs of its current chunk to evaluate (as long as the chunk's pairs).
+  std::vector<std::vector<PairToEvaluate>> pairs_to_evaluate_;
+  int most_pairs_in_a_chunk_ = 0;
   std::vector<Eigen::Vector3d> x_at_rebuild_;
   bool needs_rebuild_ = true;
   double host_z_at_rebuild_ = 0.0;
   /// Contact history of each particle with the side wall, the bottom and the top.
-  std::array<std::vector<ContactHistory>, 3> wall_history_;
+  std::array<std::vector<ContactHistory<>>, 3> wall_history_;
   std::array<std::vector<unsigned char>, 3> wall_touching_;
 
   // Host.

@@ -49,8 +49,8 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
     inv_mass_[i] = 1.0 / mass_[i];
     inv_inertia_[i] = 1.0 / initial.moment_of_inertia(k);
   }
-  for (auto& walls : wall_history_) walls.assign(n, ContactHistory<>{});
-  for (auto& walls : wall_touching_) walls.assign(n, 0);
+  wall_contacts_.assign(n, {ContactTable::none, ContactTable::none, ContactTable::none});
+  contact_tables_.resize((n + chunk_size - 1) / chunk_size);
 
   host_ = host_model_.initial_state();
   if (options_.hold_host) host_.v_m_s = 0.0;
@@ -155,9 +155,6 @@ void SoftEngine::refresh_neighbours() {
   if (!needs_rebuild_) return;
   needs_rebuild_ = false;
   neighbours_.rebuild(x_, radius_);
-  // Freed before it grows, so that the old and new buffers are not held at once.
-  if (reactions_.capacity() < static_cast<std::size_t>(neighbours_.size())) reactions_ = {};
-  reactions_.assign(neighbours_.size(), Wrench{});
   x_at_rebuild_ = x_;
   host_z_at_rebuild_ = host_.z_m;
   const int n = static_cast<int>(x_.size());
@@ -170,9 +167,9 @@ void SoftEngine::refresh_neighbours() {
 
 void SoftEngine::compute_forces(double dt_s) {
   // Each chunk of spheres is handled by one thread: its own forces, its pairs (whose
-  // reactions on partners are set aside) and its walls. The reactions are then gathered
-  // per sphere, and the chunks' totals added in chunk order — so the result is the same
-  // bits whatever the number of threads.
+  // reactions on partners are set aside) and its walls. The reactions are then added to
+  // the partners, and the chunks' totals summed, in chunk order — so the result is the
+  // same bits whatever the number of threads.
   const int n = static_cast<int>(x_.size());
   const int chunks = (n + chunk_size - 1) / chunk_size;
   chunk_totals_.resize(chunks);
@@ -187,6 +184,7 @@ void SoftEngine::compute_forces(double dt_s) {
     // The pairs to evaluate are sifted out first, without a branch, and evaluated two at
     // a time in SIMD lanes.
     PairToEvaluate* pairs = pairs_to_evaluate_[omp_get_thread_num()].data();
+    ContactTable& contacts = contact_tables_[c];
     int count = 0;
     for (int i = first; i < end; ++i) {
       on_chunk[i - first] = start_forces(i);
@@ -194,18 +192,19 @@ void SoftEngine::compute_forces(double dt_s) {
     }
     ChunkTotals totals;
     int evaluated = 0;
-    for (; evaluated + 1 < count; evaluated += 2) add_pair_contacts<Lanes>(pairs + evaluated, dt_s, first, totals, on_chunk);
-    if (evaluated < count) add_pair_contacts<double>(pairs + evaluated, dt_s, first, totals, on_chunk);
+    for (; evaluated + 1 < count; evaluated += 2) {
+      add_pair_contacts<Lanes>(pairs + evaluated, dt_s, first, contacts, totals, on_chunk);
+    }
+    if (evaluated < count) add_pair_contacts<double>(pairs + evaluated, dt_s, first, contacts, totals, on_chunk);
     for (int i = first; i < end; ++i) {
       Wrench& on_i = on_chunk[i - first];
-      add_wall_contacts(i, dt_s, totals, on_i);
+      add_wall_contacts(i, dt_s, contacts, totals, on_i);
       force_[i] = on_i.force_N;
       torque_[i] = on_i.torque_N_m;
     }
     chunk_totals_[c] = totals;
   }
-#pragma omp parallel for schedule(static) if (n >= parallel_minimum)
-  for (int j = 0; j < n; ++j) add_reactions(j);
+  add_reactions();
 
   contact_elastic_J_ = 0.0;
   contacts_ = 0;
@@ -241,14 +240,14 @@ int SoftEngine::list_pairs_to_evaluate(int i, PairToEvaluate* out, int count) co
     const int j = neighbours_.partner(k);
     const double reach = ri + radius_[j];
     out[count] = {i, k};
-    count += ((xi - x_[j]).squaredNorm() < reach * reach) | neighbours_.touching(k);
+    count += ((xi - x_[j]).squaredNorm() < reach * reach) | (neighbours_.contact(k) != ContactTable::none);
   }
   return count;
 }
 
 template <class Real>
-void SoftEngine::add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int first, ChunkTotals& totals,
-                                   Wrench* on_chunk) {
+void SoftEngine::add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int first, ContactTable& contacts,
+                                   ChunkTotals& totals, Wrench* on_chunk) {
   constexpr int lanes = lane_count<Real>;
   int i[lanes], j[lanes], k[lanes];
   for (int l = 0; l < lanes; ++l) {
@@ -270,63 +269,81 @@ void SoftEngine::add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int
   const ContactKinematics<Real> contact{
       normal, reach - distance,
       gather3<Real>([&](int l) { return v_[i[l]]; }) - gather3<Real>([&](int l) { return v_[j[l]]; }) - cross(spin_part, normal)};
-  ContactHistory<Real> h{gather3<Real>([&](int l) { return neighbours_.history(k[l]).tangential_displacement_m; }),
-                         gather3<Real>([&](int l) { return neighbours_.history(k[l]).tangential_force_N; }),
-                         gather<Real>([&](int l) { return neighbours_.history(k[l]).normal_damping_force_N; })};
+  auto history = [&](int l) -> const ContactHistory<>& { return contacts[neighbours_.contact(k[l])].history; };
+  ContactHistory<Real> h{gather3<Real>([&](int l) { return history(l).tangential_displacement_m; }),
+                         gather3<Real>([&](int l) { return history(l).tangential_force_N; }),
+                         gather<Real>([&](int l) { return history(l).normal_damping_force_N; })};
   const ContactForce<Real> c = evaluate_contact(scenario_.soft_particle, contact, dt_s, h);
   const Vec3<Real> twist = cross(normal, c.tangential_N);
   const Vec3<Real> torque_on_i = lever_i * twist, torque_on_j = -lever_j * twist;
   const auto touching = contact.overlap_m > 0.0;
-  for (int l = 0; l < lanes; ++l) {
-    neighbours_.history(k[l]) = {lane(h.tangential_displacement_m, l), lane(h.tangential_force_N, l),
-                                 lane(h.normal_damping_force_N, l)};
+  for_each_lane<Real>([&](auto l) [[gnu::always_inline]] {
+    const Vec3<double> force = lane(c.force_N, l);
     Wrench& on_i = on_chunk[i[l] - first];
-    const Eigen::Vector3d force = to_eigen(lane(c.force_N, l));
-    on_i.force_N += force;
+    on_i.force_N += to_eigen(force);
     on_i.torque_N_m -= to_eigen(lane(torque_on_i, l));
-    reactions_[neighbours_.partner_slot(k[l])] = {-force, to_eigen(lane(torque_on_j, l))};
     totals.impact_J += lane(c.dissipated_normal_J, l);
     totals.friction_J += lane(c.dissipated_tangential_J, l);
     totals.elastic_J += lane(c.elastic_J, l);
-    neighbours_.set_touching(k[l], lane_is_set(touching, l));
-    if (lane_is_set(touching, l)) totals.record_contact(lane(contact.overlap_m, l), std::min(lane(ri, l), lane(rj, l)));
+    int& open = neighbours_.contact(k[l]);
+    if (lane_is_set(touching, l)) {
+      if (open == ContactTable::none) open = contacts.open(j[l]);
+      ContactTable::Entry& entry = contacts[open];
+      entry.history = {lane(h.tangential_displacement_m, l), lane(h.tangential_force_N, l), lane(h.normal_damping_force_N, l)};
+      entry.reaction_force_N = -force;
+      entry.reaction_torque_N_m = lane(torque_on_j, l);
+      totals.record_contact(lane(contact.overlap_m, l), std::min(lane(ri, l), lane(rj, l)));
+    } else if (open != ContactTable::none) {
+      contacts.close(open);  // came apart: no reaction, and the spring has let go
+      open = ContactTable::none;
+    }
+  });
+}
+
+void SoftEngine::add_reactions() {
+  for (const ContactTable& table : contact_tables_) {
+    for (const ContactTable::Entry& entry : table.entries()) {
+      if (entry.partner < 0) continue;
+      force_[entry.partner] += to_eigen(entry.reaction_force_N);
+      torque_[entry.partner] += to_eigen(entry.reaction_torque_N_m);
+    }
   }
 }
 
-void SoftEngine::add_reactions(int j) {
-  // Summed in a local: stores into force_ would make the compiler reload every operand.
-  Wrench on_j{force_[j], torque_[j]};
-  for (int r = neighbours_.partner_first(j); r < neighbours_.partner_first(j + 1); ++r) {
-    on_j.force_N += reactions_[r].force_N;
-    on_j.torque_N_m += reactions_[r].torque_N_m;
-  }
-  force_[j] = on_j.force_N;
-  torque_[j] = on_j.torque_N_m;
-}
-
-void SoftEngine::add_wall_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i) {
+void SoftEngine::add_wall_contacts(int i, double dt_s, ContactTable& contacts, ChunkTotals& totals, Wrench& on_i) {
   const SoftContactLaw& law = scenario_.soft_wall;
   const double r = radius_[i];
   const double rho_sq = x_[i].x() * x_[i].x() + x_[i].y() * x_[i].y();
   const double side_limit = cavity_.radius_m() - r;
   const bool near[3] = {rho_sq > side_limit * side_limit, x_[i].z() - host_.z_m < r,
                         host_.z_m + cavity_.height_m() - x_[i].z() < r};
+  std::array<int, 3>& open = wall_contacts_[i];
+  // Most spheres are far from every wall: one test, without branches, lets them go.
+  static_assert(ContactTable::none == 0);
+  if (!(near[side] | near[bottom] | near[top]) && (open[side] | open[bottom] | open[top]) == 0) return;
   const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s);
   for (int wall = side; wall <= top; ++wall) {
-    if (!near[wall] && !wall_touching_[wall][i]) continue;
+    if (!near[wall] && open[wall] == ContactTable::none) continue;
     const WallGap gap = cavity_.gap(static_cast<Wall>(wall), x_[i], r, host_.z_m);
     const double lever = r + std::min(gap.gap_m, 0.0);  // the contact point is on the wall
     const ContactKinematics<double> contact{to_vec3(gap.normal), -gap.gap_m,
                                             to_vec3(v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity)};
-    const ContactForce<double> c = evaluate_contact(law, contact, dt_s, wall_history_[wall][i]);
+    ContactHistory<> history = contacts[open[wall]].history;
+    const ContactForce<double> c = evaluate_contact(law, contact, dt_s, history);
     on_i.force_N += to_eigen(c.force_N);
     on_i.torque_N_m -= lever * gap.normal.cross(to_eigen(c.tangential_N));
     totals.on_host_N -= c.force_N.z;
     totals.impact_J += c.dissipated_normal_J;
     totals.friction_J += c.dissipated_tangential_J;
     totals.elastic_J += c.elastic_J;
-    wall_touching_[wall][i] = gap.gap_m < 0.0;
-    if (gap.gap_m < 0.0) totals.record_contact(-gap.gap_m, r);
+    if (gap.gap_m < 0.0) {
+      if (open[wall] == ContactTable::none) open[wall] = contacts.open(-1);
+      contacts[open[wall]].history = history;
+      totals.record_contact(-gap.gap_m, r);
+    } else if (open[wall] != ContactTable::none) {
+      contacts.close(open[wall]);
+      open[wall] = ContactTable::none;
+    }
   }
 }
 

@@ -23,8 +23,8 @@
 
 namespace pdamp::soft {
 
-/// What a contact remembers from one step to the next. (Whether it is open at all is kept
-/// apart, as one byte per pair, so that scanning pairs that do not touch stays cheap.)
+/// What a contact remembers from one step to the next (kept for open contacts only, in a
+/// ContactTable).
 template <class Real = double>
 struct ContactHistory {
   Vec3<Real> tangential_displacement_m = zero_vec3<Real>();  ///< ξ

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <type_traits>
+#include <utility>
 
 namespace pdamp::soft {
 
@@ -31,6 +32,15 @@ inline bool lane_is_set(bool mask, int) { return mask; }
 template <class Mask>
 bool lane_is_set(Mask mask, int l) {
   return mask[l] != 0;
+}
+
+/// Calls f(l) for each lane l, with l a compile-time constant (so that reading a lane
+/// is one instruction, not a trip through memory).
+template <class Real, class F>
+[[gnu::always_inline]] inline void for_each_lane(const F& f) {
+  [&]<int... l>(std::integer_sequence<int, l...>) {
+    (f(std::integral_constant<int, l>{}), ...);
+  }(std::make_integer_sequence<int, lane_count<Real>>{});
 }
 
 /// One value per lane, value(l) for lane l.

@@ -40,6 +40,8 @@ void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const
     }
   }
   first_[n] = static_cast<int>(partner_.size());
+  owner_.resize(partner_.size());
+  for (int i = 0; i < n; ++i) std::fill(owner_.begin() + first_[i], owner_.begin() + first_[i + 1], i);
 
   // Hand over: mark i's kept partners, look up the new pairs, unmark.
   contact_.assign(partner_.size(), ContactTable::none);

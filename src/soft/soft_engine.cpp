@@ -141,12 +141,17 @@ void SoftEngine::move(double kick_s, double dt_s) {
   const double limit_sq = 0.25 * neighbours_.skin_m() * neighbours_.skin_m();
   bool beyond_skin = false;
   const int n = static_cast<int>(x_.size());
+  // Through local pointers: Eigen's stores may alias anything, members would be reloaded
+  // for every sphere.
+  Eigen::Vector3d *const x = x_.data(), *const v = v_.data(), *const w = w_.data();
+  const Eigen::Vector3d *const force = force_.data(), *const torque = torque_.data(), *const x0 = x_at_rebuild_.data();
+  const double *const inv_mass = inv_mass_.data(), *const inv_inertia = inv_inertia_.data();
 #pragma omp parallel for schedule(static) reduction(|| : beyond_skin) if (n >= parallel_minimum)
   for (int i = 0; i < n; ++i) {
-    v_[i] += force_[i] * (inv_mass_[i] * kick_s);
-    w_[i] += torque_[i] * (inv_inertia_[i] * kick_s);
-    x_[i] += v_[i] * dt_s;
-    beyond_skin |= (x_[i] - x_at_rebuild_[i] - host_shift).squaredNorm() > limit_sq;
+    v[i] += force[i] * (inv_mass[i] * kick_s);
+    w[i] += torque[i] * (inv_inertia[i] * kick_s);
+    x[i] += v[i] * dt_s;
+    beyond_skin |= (x[i] - x0[i] - host_shift).squaredNorm() > limit_sq;
   }
   needs_rebuild_ = beyond_skin;
 }
@@ -155,6 +160,7 @@ void SoftEngine::refresh_neighbours() {
   if (!needs_rebuild_) return;
   needs_rebuild_ = false;
   neighbours_.rebuild(x_, radius_);
+  compact_contact_tables();
   x_at_rebuild_ = x_;
   host_z_at_rebuild_ = host_.z_m;
   const int n = static_cast<int>(x_.size());
@@ -162,6 +168,26 @@ void SoftEngine::refresh_neighbours() {
   for (int first = 0; first < n; first += chunk_size) {
     const int pairs = neighbours_.first(std::min(n, first + chunk_size)) - neighbours_.first(first);
     most_pairs_in_a_chunk_ = std::max(most_pairs_in_a_chunk_, pairs);
+  }
+}
+
+void SoftEngine::compact_contact_tables() {
+  // Each chunk's open contacts renumbered in the order the force pass visits them, the
+  // entries of closed ones dropped: the pass and the reactions then run through the table
+  // front to back.
+  const int n = static_cast<int>(x_.size());
+  for (int c = 0; c < static_cast<int>(contact_tables_.size()); ++c) {
+    ContactTable& table = contact_tables_[c];
+    compacted_table_.clear();
+    auto move_over = [&](int& contact) {
+      if (contact != ContactTable::none) contact = compacted_table_.append(table[contact]);
+    };
+    const int first = c * chunk_size, end = std::min(n, first + chunk_size);
+    for (int k = neighbours_.first(first); k < neighbours_.first(end); ++k) move_over(neighbours_.contact(k));
+    for (int i = first; i < end; ++i) {
+      for (int& contact : wall_contacts_[i]) move_over(contact);
+    }
+    std::swap(table, compacted_table_);
   }
 }
 
@@ -181,15 +207,12 @@ void SoftEngine::compute_forces(double dt_s) {
   for (int c = 0; c < chunks; ++c) {
     const int first = c * chunk_size, end = std::min(n, first + chunk_size);
     Wrench on_chunk[chunk_size];
+    for (int i = first; i < end; ++i) on_chunk[i - first] = start_forces(i);
     // The pairs to evaluate are sifted out first, without a branch, and evaluated two at
     // a time in SIMD lanes.
     PairToEvaluate* pairs = pairs_to_evaluate_[omp_get_thread_num()].data();
+    const int count = list_pairs_to_evaluate(first, end, pairs);
     ContactTable& contacts = contact_tables_[c];
-    int count = 0;
-    for (int i = first; i < end; ++i) {
-      on_chunk[i - first] = start_forces(i);
-      count = list_pairs_to_evaluate(i, pairs, count);
-    }
     ChunkTotals totals;
     int evaluated = 0;
     for (; evaluated + 1 < count; evaluated += 2) {
@@ -225,6 +248,7 @@ void SoftEngine::compute_forces(double dt_s) {
 
 SoftEngine::Wrench SoftEngine::start_forces(int i) const {
   const double drag = options_.settling_drag_1_s;
+  if (drag == 0.0) return {mass_[i] * scenario_.gravity_m_s2, Eigen::Vector3d::Zero()};  // a run, not settling
   return {mass_[i] * (scenario_.gravity_m_s2 - drag * v_[i]), -drag / inv_inertia_[i] * w_[i]};
 }
 
@@ -233,14 +257,15 @@ void SoftEngine::ChunkTotals::record_contact(double overlap_m, double radius_m) 
   max_overlap_ratio = std::max(max_overlap_ratio, overlap_m / radius_m);
 }
 
-int SoftEngine::list_pairs_to_evaluate(int i, PairToEvaluate* out, int count) const {
-  const Eigen::Vector3d xi = x_[i];
-  const double ri = radius_[i];
-  for (int k = neighbours_.first(i); k < neighbours_.first(i + 1); ++k) {
-    const int j = neighbours_.partner(k);
-    const double reach = ri + radius_[j];
+int SoftEngine::list_pairs_to_evaluate(int first, int end, PairToEvaluate* out) const {
+  // One loop over the chunk's pairs, not one per sphere: a sphere's few pairs would make
+  // the loop's exit a branch mispredicted once per sphere.
+  int count = 0;
+  for (int k = neighbours_.first(first), last = neighbours_.first(end); k < last; ++k) {
+    const int i = neighbours_.owner(k), j = neighbours_.partner(k);
+    const double reach = radius_[i] + radius_[j];
     out[count] = {i, k};
-    count += ((xi - x_[j]).squaredNorm() < reach * reach) | (neighbours_.contact(k) != ContactTable::none);
+    count += ((x_[i] - x_[j]).squaredNorm() < reach * reach) | (neighbours_.contact(k) != ContactTable::none);
   }
   return count;
 }

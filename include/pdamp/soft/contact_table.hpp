@@ -47,6 +47,17 @@ class ContactTable {
     free_.push_back(contact);
   }
 
+  /// Empties the table (keeping its memory).
+  void clear() {
+    entries_.resize(1);
+    free_.clear();
+  }
+  /// Appends a copy of another table's entry; returns its index here.
+  int append(const Entry& entry) {
+    entries_.push_back(entry);
+    return static_cast<int>(entries_.size()) - 1;
+  }
+
  private:
   std::vector<Entry> entries_;
   std::vector<int> free_;

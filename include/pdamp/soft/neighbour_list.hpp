@@ -25,6 +25,7 @@ class NeighbourList {
   int size() const { return static_cast<int>(partner_.size()); }
   /// Pairs of particle i are [first(i), first(i + 1)).
   int first(int i) const { return first_[i]; }
+  int owner(int k) const { return owner_[k]; }
   int partner(int k) const { return partner_[k]; }
   /// The open contact of pair k, or ContactTable::none.
   int& contact(int k) { return contact_[k]; }
@@ -36,7 +37,7 @@ class NeighbourList {
   double skin_m_;
   CellList cells_;
   Eigen::Matrix3Xd cell_positions_;
-  std::vector<int> first_, partner_, contact_;
+  std::vector<int> first_, owner_, partner_, contact_;
   /// During a rebuild: the open contacts, by owner ([kept_first_[i], kept_first_[i + 1])
   /// for particle i), and where partner j of the current i is kept, or −1.
   struct KeptContact {

@@ -75,7 +75,8 @@ class SoftEngine final : public Engine {
   // stores (histories, reactions) might otherwise alias them and force a store and reload
   // per contact.
   [[gnu::always_inline]] inline Wrench start_forces(int i) const;
-  [[gnu::always_inline]] inline int list_pairs_to_evaluate(int i, PairToEvaluate* out, int count) const;
+  /// Lists the pairs of spheres [first, end) that touch or were touching; returns how many.
+  [[gnu::always_inline]] inline int list_pairs_to_evaluate(int first, int end, PairToEvaluate* out) const;
   /// Evaluates lane_count<Real> pairs at once, adding to the wrenches `on_chunk[owner − first]`.
   template <class Real>
   [[gnu::always_inline]] inline void add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int first,
@@ -83,6 +84,7 @@ class SoftEngine final : public Engine {
   [[gnu::always_inline]] inline void add_wall_contacts(int i, double dt_s, ContactTable& contacts, ChunkTotals& totals,
                                                        Wrench& on_i);
   void add_reactions();
+  void compact_contact_tables();
 
   Scenario scenario_;
   SoftEngineOptions options_;
@@ -101,6 +103,7 @@ class SoftEngine final : public Engine {
   /// pair contacts put on their partners (added to the partners after the chunks, in
   /// chunk order).
   std::vector<ContactTable> contact_tables_;
+  ContactTable compacted_table_;  ///< where compact_contact_tables builds each chunk's table
   std::vector<ChunkTotals> chunk_totals_;
   /// Per thread: the pairs of its current chunk to evaluate (as long as the chunk's pairs).
   std::vector<std::vector<PairToEvaluate>> pairs_to_evaluate_;

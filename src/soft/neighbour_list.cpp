@@ -9,9 +9,8 @@ namespace pdamp::soft {
 
 void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& radii) {
   const int n = static_cast<int>(positions.size());
-  cell_positions_.resize(3, n);
-  for (int i = 0; i < n; ++i) cell_positions_.col(i) = positions[i];
-  cells_.build(grid_, cell_positions_);
+  // The positions seen as a 3 × n matrix, without a copy (a Vector3d is three doubles).
+  cells_.build(grid_, Eigen::Map<const Eigen::Matrix3Xd>(n > 0 ? positions.front().data() : nullptr, 3, n));
 
   // Only the open contacts are set aside to be handed over.
   kept_first_.assign(n + 1, 0);

@@ -187,7 +187,7 @@ void SoftEngine::compact_contact_tables() {
     for (int i = first; i < end; ++i) {
       for (int& contact : wall_contacts_[i]) move_over(contact);
     }
-    std::swap(table, compacted_table_);
+    table.copy_from(compacted_table_);  // not swapped: each table keeps a capacity fit for its chunk
   }
 }
 

@@ -33,6 +33,8 @@ class ContactTable {
   int open(int partner) {
     int contact = static_cast<int>(entries_.size());
     if (free_.empty()) {
+      // Grown by a quarter, not doubled: the tables are most of the engine's memory.
+      if (entries_.size() == entries_.capacity()) entries_.reserve(entries_.size() + entries_.size() / 4 + 16);
       entries_.emplace_back();
     } else {
       contact = free_.back();
@@ -56,6 +58,11 @@ class ContactTable {
   int append(const Entry& entry) {
     entries_.push_back(entry);
     return static_cast<int>(entries_.size()) - 1;
+  }
+  /// Takes over another table's entries, keeping its own memory where it suffices.
+  void copy_from(const ContactTable& other) {
+    entries_.assign(other.entries_.begin(), other.entries_.end());
+    free_.assign(other.free_.begin(), other.free_.end());
   }
 
  private:

@@ -36,7 +36,6 @@ class NeighbourList {
   CellGrid grid_;
   double skin_m_;
   CellList cells_;
-  Eigen::Matrix3Xd cell_positions_;
   std::vector<int> first_, owner_, partner_, contact_;
   /// During a rebuild: the open contacts, by owner ([kept_first_[i], kept_first_[i + 1])
   /// for particle i), and where partner j of the current i is kept, or −1.

@@ -15,7 +15,7 @@ CellGrid::CellGrid(double cavity_radius_m, double cavity_height_m, double min_ce
   n_z_ = std::max(3, static_cast<int>(std::ceil(cavity_height_m / cell_m_)) + 2);
 }
 
-void CellList::build(const CellGrid& grid, const Eigen::Matrix3Xd& positions) {
+void CellList::build(const CellGrid& grid, const Eigen::Ref<const Eigen::Matrix3Xd>& positions) {
   const auto n = static_cast<int>(positions.cols());
   start_.assign(grid.cell_count() + 1, 0);
   cell_of_.resize(n);

@@ -3,23 +3,23 @@
 #include <algorithm>
 #include <array>
 
+#include "pdamp/soft/contact_table.hpp"
+
 namespace pdamp::soft {
 
 void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& radii) {
   const int n = static_cast<int>(positions.size());
-  cell_positions_.resize(3, n);
-  for (int i = 0; i < n; ++i) cell_positions_.col(i) = positions[i];
-  cells_.build(grid_, cell_positions_);
+  // The positions seen as a 3 × n matrix, without a copy (a Vector3d is three doubles).
+  cells_.build(grid_, Eigen::Map<const Eigen::Matrix3Xd>(n > 0 ? positions.front().data() : nullptr, 3, n));
 
-  // A pair that is apart has a blank history (evaluate_contact clears it as the pair comes
-  // apart), so only the touching pairs' histories are set aside to be handed over.
+  // Only the open contacts are set aside to be handed over.
   kept_first_.assign(n + 1, 0);
   kept_.clear();
   const int listed = first_.empty() ? 0 : n;  // none before the first build
   for (int i = 0; i < listed; ++i) {
     kept_first_[i] = static_cast<int>(kept_.size());
     for (int k = first_[i]; k < first_[i + 1]; ++k) {
-      if (touching_[k]) kept_.push_back({partner_[k], history_[k]});
+      if (contact_[k] != ContactTable::none) kept_.push_back({partner_[k], contact_[k]});
     }
   }
   std::fill(kept_first_.begin() + listed, kept_first_.end(), static_cast<int>(kept_.size()));
@@ -39,12 +39,11 @@ void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const
     }
   }
   first_[n] = static_cast<int>(partner_.size());
+  owner_.resize(partner_.size());
+  for (int i = 0; i < n; ++i) std::fill(owner_.begin() + first_[i], owner_.begin() + first_[i + 1], i);
 
   // Hand over: mark i's kept partners, look up the new pairs, unmark.
-  // Free a buffer that must grow before refilling it: assign would hold both at once.
-  if (history_.capacity() < partner_.size()) history_ = {};
-  history_.assign(partner_.size(), ContactHistory{});
-  touching_.assign(partner_.size(), 0);
+  contact_.assign(partner_.size(), ContactTable::none);
   old_slot_.assign(n, -1);
   for (int i = 0; i < n; ++i) {
     if (kept_first_[i] == kept_first_[i + 1]) continue;
@@ -52,19 +51,11 @@ void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const
     for (int k = first_[i]; k < first_[i + 1]; ++k) {
       const int s = old_slot_[partner_[k]];
       if (s < 0) continue;
-      history_[k] = kept_[s].history;
-      touching_[k] = 1;
+      contact_[k] = kept_[s].contact;
     }
     for (int s = kept_first_[i]; s < kept_first_[i + 1]; ++s) old_slot_[kept_[s].partner] = -1;
   }
 
-  // The slots by partner, by a counting sort on the partners (stable: pairs ascending).
-  reverse_first_.assign(n + 1, 0);
-  for (const int j : partner_) ++reverse_first_[j + 1];
-  for (int j = 0; j < n; ++j) reverse_first_[j + 1] += reverse_first_[j];
-  partner_slot_.resize(partner_.size());
-  old_slot_.assign(reverse_first_.begin(), reverse_first_.end() - 1);  // reused as fill cursors
-  for (int k = 0; k < static_cast<int>(partner_.size()); ++k) partner_slot_[k] = old_slot_[partner_[k]]++;
   ++rebuilds_;
 }
 

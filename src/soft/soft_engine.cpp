@@ -1,5 +1,8 @@
 #include "pdamp/soft/soft_engine.hpp"
 
+#include <omp.h>
+
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -46,8 +49,8 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
     inv_mass_[i] = 1.0 / mass_[i];
     inv_inertia_[i] = 1.0 / initial.moment_of_inertia(k);
   }
-  for (auto& walls : wall_history_) walls.assign(n, ContactHistory{});
-  for (auto& walls : wall_touching_) walls.assign(n, 0);
+  wall_contacts_.assign(n, {ContactTable::none, ContactTable::none, ContactTable::none});
+  contact_tables_.resize((n + chunk_size - 1) / chunk_size);
 
   host_ = host_model_.initial_state();
   if (options_.hold_host) host_.v_m_s = 0.0;
@@ -138,12 +141,17 @@ void SoftEngine::move(double kick_s, double dt_s) {
   const double limit_sq = 0.25 * neighbours_.skin_m() * neighbours_.skin_m();
   bool beyond_skin = false;
   const int n = static_cast<int>(x_.size());
+  // Through local pointers: Eigen's stores may alias anything, members would be reloaded
+  // for every sphere.
+  Eigen::Vector3d *const x = x_.data(), *const v = v_.data(), *const w = w_.data();
+  const Eigen::Vector3d *const force = force_.data(), *const torque = torque_.data(), *const x0 = x_at_rebuild_.data();
+  const double *const inv_mass = inv_mass_.data(), *const inv_inertia = inv_inertia_.data();
 #pragma omp parallel for schedule(static) reduction(|| : beyond_skin) if (n >= parallel_minimum)
   for (int i = 0; i < n; ++i) {
-    v_[i] += force_[i] * (inv_mass_[i] * kick_s);
-    w_[i] += torque_[i] * (inv_inertia_[i] * kick_s);
-    x_[i] += v_[i] * dt_s;
-    beyond_skin |= (x_[i] - x_at_rebuild_[i] - host_shift).squaredNorm() > limit_sq;
+    v[i] += force[i] * (inv_mass[i] * kick_s);
+    w[i] += torque[i] * (inv_inertia[i] * kick_s);
+    x[i] += v[i] * dt_s;
+    beyond_skin |= (x[i] - x0[i] - host_shift).squaredNorm() > limit_sq;
   }
   needs_rebuild_ = beyond_skin;
 }
@@ -152,35 +160,74 @@ void SoftEngine::refresh_neighbours() {
   if (!needs_rebuild_) return;
   needs_rebuild_ = false;
   neighbours_.rebuild(x_, radius_);
-  // Freed before it grows, so that the old and new buffers are not held at once.
-  if (reactions_.capacity() < static_cast<std::size_t>(neighbours_.size())) reactions_ = {};
-  reactions_.assign(neighbours_.size(), Wrench{});
+  compact_contact_tables();
   x_at_rebuild_ = x_;
   host_z_at_rebuild_ = host_.z_m;
+  const int n = static_cast<int>(x_.size());
+  most_pairs_in_a_chunk_ = 0;
+  for (int first = 0; first < n; first += chunk_size) {
+    const int pairs = neighbours_.first(std::min(n, first + chunk_size)) - neighbours_.first(first);
+    most_pairs_in_a_chunk_ = std::max(most_pairs_in_a_chunk_, pairs);
+  }
+}
+
+void SoftEngine::compact_contact_tables() {
+  // Each chunk's open contacts renumbered in the order the force pass visits them, the
+  // entries of closed ones dropped: the pass and the reactions then run through the table
+  // front to back.
+  const int n = static_cast<int>(x_.size());
+  for (int c = 0; c < static_cast<int>(contact_tables_.size()); ++c) {
+    ContactTable& table = contact_tables_[c];
+    compacted_table_.clear();
+    auto move_over = [&](int& contact) {
+      if (contact != ContactTable::none) contact = compacted_table_.append(table[contact]);
+    };
+    const int first = c * chunk_size, end = std::min(n, first + chunk_size);
+    for (int k = neighbours_.first(first); k < neighbours_.first(end); ++k) move_over(neighbours_.contact(k));
+    for (int i = first; i < end; ++i) {
+      for (int& contact : wall_contacts_[i]) move_over(contact);
+    }
+    table.copy_from(compacted_table_);  // not swapped: each table keeps a capacity fit for its chunk
+  }
 }
 
 void SoftEngine::compute_forces(double dt_s) {
   // Each chunk of spheres is handled by one thread: its own forces, its pairs (whose
-  // reactions on partners are set aside) and its walls. The reactions are then gathered
-  // per sphere, and the chunks' totals added in chunk order — so the result is the same
-  // bits whatever the number of threads.
+  // reactions on partners are set aside) and its walls. The reactions are then added to
+  // the partners, and the chunks' totals summed, in chunk order — so the result is the
+  // same bits whatever the number of threads.
   const int n = static_cast<int>(x_.size());
   const int chunks = (n + chunk_size - 1) / chunk_size;
   chunk_totals_.resize(chunks);
+  pairs_to_evaluate_.resize(std::max<std::size_t>(pairs_to_evaluate_.size(), omp_get_max_threads()));
+  for (auto& pairs : pairs_to_evaluate_) {
+    if (pairs.size() < static_cast<std::size_t>(most_pairs_in_a_chunk_)) pairs.resize(most_pairs_in_a_chunk_);
+  }
 #pragma omp parallel for schedule(static) if (n >= parallel_minimum)
   for (int c = 0; c < chunks; ++c) {
+    const int first = c * chunk_size, end = std::min(n, first + chunk_size);
+    Wrench on_chunk[chunk_size];
+    for (int i = first; i < end; ++i) on_chunk[i - first] = start_forces(i);
+    // The pairs to evaluate are sifted out first, without a branch, and evaluated two at
+    // a time in SIMD lanes.
+    PairToEvaluate* pairs = pairs_to_evaluate_[omp_get_thread_num()].data();
+    const int count = list_pairs_to_evaluate(first, end, pairs);
+    ContactTable& contacts = contact_tables_[c];
     ChunkTotals totals;
-    for (int i = c * chunk_size; i < std::min(n, (c + 1) * chunk_size); ++i) {
-      Wrench on_i = start_forces(i);
-      add_particle_contacts(i, dt_s, totals, on_i);
-      add_wall_contacts(i, dt_s, totals, on_i);
+    int evaluated = 0;
+    for (; evaluated + 1 < count; evaluated += 2) {
+      add_pair_contacts<Lanes>(pairs + evaluated, dt_s, first, contacts, totals, on_chunk);
+    }
+    if (evaluated < count) add_pair_contacts<double>(pairs + evaluated, dt_s, first, contacts, totals, on_chunk);
+    for (int i = first; i < end; ++i) {
+      Wrench& on_i = on_chunk[i - first];
+      add_wall_contacts(i, dt_s, contacts, totals, on_i);
       force_[i] = on_i.force_N;
       torque_[i] = on_i.torque_N_m;
     }
     chunk_totals_[c] = totals;
   }
-#pragma omp parallel for schedule(static) if (n >= parallel_minimum)
-  for (int j = 0; j < n; ++j) add_reactions(j);
+  add_reactions();
 
   contact_elastic_J_ = 0.0;
   contacts_ = 0;
@@ -201,6 +248,7 @@ void SoftEngine::compute_forces(double dt_s) {
 
 SoftEngine::Wrench SoftEngine::start_forces(int i) const {
   const double drag = options_.settling_drag_1_s;
+  if (drag == 0.0) return {mass_[i] * scenario_.gravity_m_s2, Eigen::Vector3d::Zero()};  // a run, not settling
   return {mass_[i] * (scenario_.gravity_m_s2 - drag * v_[i]), -drag / inv_inertia_[i] * w_[i]};
 }
 
@@ -209,70 +257,118 @@ void SoftEngine::ChunkTotals::record_contact(double overlap_m, double radius_m) 
   max_overlap_ratio = std::max(max_overlap_ratio, overlap_m / radius_m);
 }
 
-void SoftEngine::add_particle_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i) {
-  const SoftContactLaw& law = scenario_.soft_particle;
-  const Eigen::Vector3d xi = x_[i];
-  const double ri = radius_[i];
-  for (int k = neighbours_.first(i); k < neighbours_.first(i + 1); ++k) {
-    const int j = neighbours_.partner(k);
-    const Eigen::Vector3d d = xi - x_[j];
-    const double reach = ri + radius_[j];
-    const double distance_sq = d.squaredNorm();
-    if (distance_sq >= reach * reach && !neighbours_.touching(k)) continue;
-    const double distance = std::sqrt(distance_sq);
-    // The contact point splits the centre distance in the ratio of the radii, so the
-    // lever arms add up to the distance and angular momentum is conserved exactly.
-    const double share = distance / reach, lever_i = ri * share, lever_j = radius_[j] * share;
-    const Eigen::Vector3d normal = d * (1.0 / distance);
-    const ContactKinematics contact{normal, reach - distance,
-                                    v_[i] - v_[j] - (lever_i * w_[i] + lever_j * w_[j]).cross(normal)};
-    const ContactForce c = evaluate_contact(law, contact, dt_s, neighbours_.history(k));
-    const Eigen::Vector3d twist = normal.cross(c.tangential_N);
-    on_i.force_N += c.force_N;
-    on_i.torque_N_m -= lever_i * twist;
-    reactions_[neighbours_.partner_slot(k)] = {-c.force_N, -lever_j * twist};
-    totals.impact_J += c.dissipated_normal_J;
-    totals.friction_J += c.dissipated_tangential_J;
-    totals.elastic_J += c.elastic_J;
-    const bool touching = contact.overlap_m > 0.0;
-    neighbours_.set_touching(k, touching);
-    if (touching) totals.record_contact(contact.overlap_m, std::min(ri, radius_[j]));
+int SoftEngine::list_pairs_to_evaluate(int first, int end, PairToEvaluate* out) const {
+  // One loop over the chunk's pairs, not one per sphere: a sphere's few pairs would make
+  // the loop's exit a branch mispredicted once per sphere.
+  int count = 0;
+  for (int k = neighbours_.first(first), last = neighbours_.first(end); k < last; ++k) {
+    const int i = neighbours_.owner(k), j = neighbours_.partner(k);
+    const double reach = radius_[i] + radius_[j];
+    out[count] = {i, k};
+    count += ((x_[i] - x_[j]).squaredNorm() < reach * reach) | (neighbours_.contact(k) != ContactTable::none);
+  }
+  return count;
+}
+
+template <class Real>
+void SoftEngine::add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int first, ContactTable& contacts,
+                                   ChunkTotals& totals, Wrench* on_chunk) {
+  constexpr int lanes = lane_count<Real>;
+  int i[lanes], j[lanes], k[lanes];
+  for (int l = 0; l < lanes; ++l) {
+    i[l] = pairs[l].owner;
+    k[l] = pairs[l].pair;
+    j[l] = neighbours_.partner(k[l]);
+  }
+  const Vec3<Real> d = gather3<Real>([&](int l) { return x_[i[l]]; }) - gather3<Real>([&](int l) { return x_[j[l]]; });
+  const Real ri = gather<Real>([&](int l) { return radius_[i[l]]; });
+  const Real rj = gather<Real>([&](int l) { return radius_[j[l]]; });
+  const Real reach = ri + rj;
+  const Real distance = sqrt_of(squared_norm(d));
+  // The contact point splits the centre distance in the ratio of the radii, so the
+  // lever arms add up to the distance and angular momentum is conserved exactly.
+  const Real share = distance / reach, lever_i = ri * share, lever_j = rj * share;
+  const Vec3<Real> normal = d * (1.0 / distance);
+  const Vec3<Real> spin_part = lever_i * gather3<Real>([&](int l) { return w_[i[l]]; }) +
+                               lever_j * gather3<Real>([&](int l) { return w_[j[l]]; });
+  const ContactKinematics<Real> contact{
+      normal, reach - distance,
+      gather3<Real>([&](int l) { return v_[i[l]]; }) - gather3<Real>([&](int l) { return v_[j[l]]; }) - cross(spin_part, normal)};
+  auto history = [&](int l) -> const ContactHistory<>& { return contacts[neighbours_.contact(k[l])].history; };
+  ContactHistory<Real> h{gather3<Real>([&](int l) { return history(l).tangential_displacement_m; }),
+                         gather3<Real>([&](int l) { return history(l).tangential_force_N; }),
+                         gather<Real>([&](int l) { return history(l).normal_damping_force_N; })};
+  const ContactForce<Real> c = evaluate_contact(scenario_.soft_particle, contact, dt_s, h);
+  const Vec3<Real> twist = cross(normal, c.tangential_N);
+  const Vec3<Real> torque_on_i = lever_i * twist, torque_on_j = -lever_j * twist;
+  const auto touching = contact.overlap_m > 0.0;
+  for_each_lane<Real>([&](auto l) [[gnu::always_inline]] {
+    const Vec3<double> force = lane(c.force_N, l);
+    Wrench& on_i = on_chunk[i[l] - first];
+    on_i.force_N += to_eigen(force);
+    on_i.torque_N_m -= to_eigen(lane(torque_on_i, l));
+    totals.impact_J += lane(c.dissipated_normal_J, l);
+    totals.friction_J += lane(c.dissipated_tangential_J, l);
+    totals.elastic_J += lane(c.elastic_J, l);
+    int& open = neighbours_.contact(k[l]);
+    if (lane_is_set(touching, l)) {
+      if (open == ContactTable::none) open = contacts.open(j[l]);
+      ContactTable::Entry& entry = contacts[open];
+      entry.history = {lane(h.tangential_displacement_m, l), lane(h.tangential_force_N, l), lane(h.normal_damping_force_N, l)};
+      entry.reaction_force_N = -force;
+      entry.reaction_torque_N_m = lane(torque_on_j, l);
+      totals.record_contact(lane(contact.overlap_m, l), std::min(lane(ri, l), lane(rj, l)));
+    } else if (open != ContactTable::none) {
+      contacts.close(open);  // came apart: no reaction, and the spring has let go
+      open = ContactTable::none;
+    }
+  });
+}
+
+void SoftEngine::add_reactions() {
+  for (const ContactTable& table : contact_tables_) {
+    for (const ContactTable::Entry& entry : table.entries()) {
+      if (entry.partner < 0) continue;
+      force_[entry.partner] += to_eigen(entry.reaction_force_N);
+      torque_[entry.partner] += to_eigen(entry.reaction_torque_N_m);
+    }
   }
 }
 
-void SoftEngine::add_reactions(int j) {
-  // Summed in a local: stores into force_ would make the compiler reload every operand.
-  Wrench on_j{force_[j], torque_[j]};
-  for (int r = neighbours_.partner_first(j); r < neighbours_.partner_first(j + 1); ++r) {
-    on_j.force_N += reactions_[r].force_N;
-    on_j.torque_N_m += reactions_[r].torque_N_m;
-  }
-  force_[j] = on_j.force_N;
-  torque_[j] = on_j.torque_N_m;
-}
-
-void SoftEngine::add_wall_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i) {
+void SoftEngine::add_wall_contacts(int i, double dt_s, ContactTable& contacts, ChunkTotals& totals, Wrench& on_i) {
   const SoftContactLaw& law = scenario_.soft_wall;
   const double r = radius_[i];
   const double rho_sq = x_[i].x() * x_[i].x() + x_[i].y() * x_[i].y();
   const double side_limit = cavity_.radius_m() - r;
   const bool near[3] = {rho_sq > side_limit * side_limit, x_[i].z() - host_.z_m < r,
                         host_.z_m + cavity_.height_m() - x_[i].z() < r};
+  std::array<int, 3>& open = wall_contacts_[i];
+  // Most spheres are far from every wall: one test, without branches, lets them go.
+  static_assert(ContactTable::none == 0);
+  if (!(near[side] | near[bottom] | near[top]) && (open[side] | open[bottom] | open[top]) == 0) return;
   const Eigen::Vector3d wall_velocity(0.0, 0.0, host_.v_m_s);
   for (int wall = side; wall <= top; ++wall) {
-    if (!near[wall] && !wall_touching_[wall][i]) continue;
+    if (!near[wall] && open[wall] == ContactTable::none) continue;
     const WallGap gap = cavity_.gap(static_cast<Wall>(wall), x_[i], r, host_.z_m);
     const double lever = r + std::min(gap.gap_m, 0.0);  // the contact point is on the wall
-    const ContactKinematics contact{gap.normal, -gap.gap_m, v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity};
-    const ContactForce c = evaluate_contact(law, contact, dt_s, wall_history_[wall][i]);
-    on_i.force_N += c.force_N;
-    on_i.torque_N_m -= lever * gap.normal.cross(c.tangential_N);
-    totals.on_host_N -= c.force_N.z();
+    const ContactKinematics<double> contact{to_vec3(gap.normal), -gap.gap_m,
+                                            to_vec3(v_[i] - lever * w_[i].cross(gap.normal) - wall_velocity)};
+    ContactHistory<> history = contacts[open[wall]].history;
+    const ContactForce<double> c = evaluate_contact(law, contact, dt_s, history);
+    on_i.force_N += to_eigen(c.force_N);
+    on_i.torque_N_m -= lever * gap.normal.cross(to_eigen(c.tangential_N));
+    totals.on_host_N -= c.force_N.z;
     totals.impact_J += c.dissipated_normal_J;
     totals.friction_J += c.dissipated_tangential_J;
     totals.elastic_J += c.elastic_J;
-    wall_touching_[wall][i] = gap.gap_m < 0.0;
-    if (gap.gap_m < 0.0) totals.record_contact(-gap.gap_m, r);
+    if (gap.gap_m < 0.0) {
+      if (open[wall] == ContactTable::none) open[wall] = contacts.open(-1);
+      contacts[open[wall]].history = history;
+      totals.record_contact(-gap.gap_m, r);
+    } else if (open[wall] != ContactTable::none) {
+      contacts.close(open[wall]);
+      open[wall] = ContactTable::none;
+    }
   }
 }
 

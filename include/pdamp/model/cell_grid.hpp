@@ -105,7 +105,7 @@ inline int CellGrid::neighbours(const CellCoord& c, std::array<int, 27>& out) co
 /// `particles_in(c)`. Rebuilding reuses the arrays, so it does not allocate once warm.
 class CellList {
  public:
-  void build(const CellGrid& grid, const Eigen::Matrix3Xd& positions);
+  void build(const CellGrid& grid, const Eigen::Ref<const Eigen::Matrix3Xd>& positions);
   std::span<const int> particles_in(int cell) const {
     return {order_.data() + start_[cell], static_cast<std::size_t>(start_[cell + 1] - start_[cell])};
   }

@@ -18,90 +18,90 @@
 /// The Hertz spring is conservative and booked as stored energy, so what remains in the
 /// energy balance is the integration error itself, O(Δt²).
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-#include <cmath>
-
 #include "pdamp/scenario/scenario.hpp"
+#include "pdamp/soft/lanes.hpp"
 
 namespace pdamp::soft {
 
-/// What a contact remembers from one step to the next. (Whether it is open at all is kept
-/// apart, as one byte per pair, so that scanning pairs that do not touch stays cheap.)
+/// What a contact remembers from one step to the next (kept for open contacts only, in a
+/// ContactTable).
+template <class Real = double>
 struct ContactHistory {
-  Eigen::Vector3d tangential_displacement_m = Eigen::Vector3d::Zero();  ///< ξ
-  Eigen::Vector3d tangential_force_N = Eigen::Vector3d::Zero();         ///< f_s applied last step
-  double normal_damping_force_N = 0.0;  ///< f_n − k_n δ^{3/2} applied last step (dashpot and clamp)
+  Vec3<Real> tangential_displacement_m = zero_vec3<Real>();  ///< ξ
+  Vec3<Real> tangential_force_N = zero_vec3<Real>();         ///< f_s applied last step
+  Real normal_damping_force_N{};  ///< f_n − k_n δ^{3/2} applied last step (dashpot and clamp)
 };
 
 /// How the two bodies meet this step.
+template <class Real>
 struct ContactKinematics {
-  Eigen::Vector3d normal;  ///< unit vector from body j to body i
-  double overlap_m;        ///< r_i + r_j − distance; ≤ 0 means apart
+  Vec3<Real> normal;  ///< unit vector from body j to body i
+  Real overlap_m;     ///< r_i + r_j − distance; ≤ 0 means apart
   /// Velocity of i's contact point relative to j's over the step (the half-step
   /// velocities the integrator moved them by): it loads the tangential spring and drives
   /// the dashpots.
-  Eigen::Vector3d velocity;
+  Vec3<Real> velocity;
 };
 
 /// The force on body i at one contact, and the energy it moved this step.
+template <class Real>
 struct ContactForce {
-  Eigen::Vector3d force_N;       ///< on body i (body j gets the opposite)
-  Eigen::Vector3d tangential_N;  ///< tangential part of force_N, for the torques −l n × f_s
-  double elastic_J = 0.0;               ///< energy stored in the contact after the step
-  double dissipated_normal_J = 0.0;     ///< this step's impact loss
-  double dissipated_tangential_J = 0.0; ///< this step's friction loss
+  Vec3<Real> force_N;       ///< on body i (body j gets the opposite)
+  Vec3<Real> tangential_N;  ///< tangential part of force_N, for the torques −l n × f_s
+  Real elastic_J;                ///< energy stored in the contact after the step
+  Real dissipated_normal_J;      ///< this step's impact loss
+  Real dissipated_tangential_J;  ///< this step's friction loss
 };
 
-/// Evaluates one contact — touching, or open last step — for a step of length dt and
-/// updates its history; a contact that has come apart (overlap ≤ 0) is closed: its books
-/// are balanced (the spring's leftover energy goes to friction) and its history cleared.
-[[gnu::always_inline]] inline ContactForce evaluate_contact(const SoftContactLaw& law, const ContactKinematics& k, double dt_s,
-                                     ContactHistory& h) {
-  ContactForce out;
-  const Eigen::Vector3d& n = k.normal;
-  const double closing_speed = -k.velocity.dot(n);  // δ'
-  const Eigen::Vector3d tangential_velocity = k.velocity + closing_speed * n;
-  const Eigen::Vector3d slip_m = tangential_velocity * dt_s;
-  const double overlap_change_m = closing_speed * dt_s;
-  const double spring_energy_before = 0.5 * law.ks_N_m * h.tangential_displacement_m.squaredNorm();
+/// Evaluates one contact (or two, in lanes) — touching, or open last step — for a step of
+/// length dt and updates its history; a contact that has come apart (overlap ≤ 0) is
+/// closed: its books are balanced (the spring's leftover energy goes to friction) and its
+/// history cleared. Written without branches on the contact, each `if` a select.
+template <class Real>
+[[gnu::always_inline]] inline ContactForce<Real> evaluate_contact(const SoftContactLaw& law, const ContactKinematics<Real>& k,
+                                                                  double dt_s, ContactHistory<Real>& h) {
+  const Vec3<Real>& n = k.normal;
+  const Real closing_speed = -dot(k.velocity, n);  // δ'
+  const Vec3<Real> tangential_velocity = k.velocity + closing_speed * n;
+  const Vec3<Real> slip_m = tangential_velocity * dt_s;
+  const Real overlap_change_m = closing_speed * dt_s;
+  const Real spring_energy_before = 0.5 * law.ks_N_m * squared_norm(h.tangential_displacement_m);
+  const auto touching = k.overlap_m > 0.0;
 
-  double damping_force = 0.0;
-  Eigen::Vector3d fs = Eigen::Vector3d::Zero();
-  if (k.overlap_m > 0.0) {
-    const double elastic_force = law.kn_N_m1_5 * k.overlap_m * std::sqrt(k.overlap_m);
-    const double fn = std::max(0.0, elastic_force + law.cn_N_s_m * closing_speed);
-    damping_force = fn - elastic_force;
+  // Where apart, the overlap's square root is not a number; the selects below drop it.
+  const Real elastic_force = law.kn_N_m1_5 * k.overlap_m * sqrt_of(k.overlap_m);
+  const Real pushing = elastic_force + law.cn_N_s_m * closing_speed;
+  const Real fn = select(pushing > 0.0, pushing, Real{});
+  const Real damping_force = select(touching, fn - elastic_force, Real{});
 
-    Eigen::Vector3d& xi = h.tangential_displacement_m;
-    const double xi_sq = xi.squaredNorm();
-    if (xi_sq > 0.0) {
-      // Onto the current tangent plane, keeping the stored spring energy.
-      const double off_plane = xi.dot(n);
-      const double in_plane_sq = xi_sq - off_plane * off_plane;
-      if (in_plane_sq > 0.0) xi = (xi - off_plane * n) * std::sqrt(xi_sq / in_plane_sq);
-    }
-    xi += slip_m;
-    fs = -law.ks_N_m * xi - law.cs_N_s_m * tangential_velocity;
-    const double cap = law.mu * fn;
-    const double fs_sq = fs.squaredNorm();
-    if (fs_sq > cap * cap) {
-      // Sliding: the force is capped and the spring keeps only what the capped force allows.
-      fs *= cap / std::sqrt(fs_sq);
-      if (law.ks_N_m > 0.0) xi = -(fs + law.cs_N_s_m * tangential_velocity) / law.ks_N_m;
-    }
-    out.force_N = fn * n + fs;
-    out.elastic_J = 0.4 * elastic_force * k.overlap_m + 0.5 * law.ks_N_m * xi.squaredNorm();
-  } else {
-    out.force_N.setZero();
-    h.tangential_displacement_m.setZero();  // apart: the spring lets go
-  }
+  // ξ onto the current tangent plane, keeping the stored spring energy.
+  Vec3<Real> xi = h.tangential_displacement_m;
+  const Real xi_sq = squared_norm(xi);
+  const Real off_plane = dot(xi, n);
+  const Real in_plane_sq = xi_sq - off_plane * off_plane;
+  xi = select(in_plane_sq > 0.0, (xi - off_plane * n) * sqrt_of(xi_sq / in_plane_sq), xi);
+  xi = xi + slip_m;
+  Vec3<Real> fs = -law.ks_N_m * xi - law.cs_N_s_m * tangential_velocity;
+  const Real cap = law.mu * fn;
+  const Real fs_sq = squared_norm(fs);
+  // Sliding: the force is capped and the spring keeps only what the capped force allows.
+  const auto sliding = fs_sq > cap * cap;
+  fs = select(sliding, fs * (cap / sqrt_of(fs_sq)), fs);
+  if (law.ks_N_m > 0.0) xi = select(sliding, -(fs + law.cs_N_s_m * tangential_velocity) / law.ks_N_m, xi);
+
+  // Apart: no force, and the spring lets go.
+  fs = select(touching, fs, zero_vec3<Real>());
+  xi = select(touching, xi, zero_vec3<Real>());
+  ContactForce<Real> out;
+  out.force_N = select(touching, fn * n + fs, zero_vec3<Real>());
   out.tangential_N = fs;
+  out.elastic_J = select(touching, 0.4 * elastic_force * k.overlap_m + 0.5 * law.ks_N_m * squared_norm(xi), Real{});
 
   // Trapezoids of the forces over the displacements the integrator made this step.
   out.dissipated_normal_J = 0.5 * (h.normal_damping_force_N + damping_force) * overlap_change_m;
-  out.dissipated_tangential_J = -0.5 * (h.tangential_force_N + fs).dot(slip_m) -
-                                (0.5 * law.ks_N_m * h.tangential_displacement_m.squaredNorm() - spring_energy_before);
+  out.dissipated_tangential_J = -0.5 * dot(h.tangential_force_N + fs, slip_m) -
+                                (0.5 * law.ks_N_m * squared_norm(xi) - spring_energy_before);
+  h.tangential_displacement_m = xi;
   h.tangential_force_N = fs;
   h.normal_damping_force_N = damping_force;
   return out;

@@ -11,6 +11,7 @@
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/host.hpp"
 #include "pdamp/soft/contact_law.hpp"
+#include "pdamp/soft/contact_table.hpp"
 #include "pdamp/soft/neighbour_list.hpp"
 
 namespace pdamp::soft {
@@ -66,13 +67,24 @@ class SoftEngine final : public Engine {
   struct Wrench {
     Eigen::Vector3d force_N = Eigen::Vector3d::Zero(), torque_N_m = Eigen::Vector3d::Zero();
   };
-  // Inlined into the force pass so that a sphere's wrench and the chunk's totals stay in
-  // registers: the pass's stores (histories, reactions) might otherwise alias them and force
-  // a store and reload per contact.
+  /// A listed pair whose contact is evaluated this step: its owner and its index in the list.
+  struct PairToEvaluate {
+    int owner, pair;
+  };
+  // Inlined into the force pass so that the chunk's totals stay in registers: the pass's
+  // stores (histories, reactions) might otherwise alias them and force a store and reload
+  // per contact.
   [[gnu::always_inline]] inline Wrench start_forces(int i) const;
-  [[gnu::always_inline]] inline void add_particle_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i);
-  [[gnu::always_inline]] inline void add_wall_contacts(int i, double dt_s, ChunkTotals& totals, Wrench& on_i);
-  void add_reactions(int j);
+  /// Lists the pairs of spheres [first, end) that touch or were touching; returns how many.
+  [[gnu::always_inline]] inline int list_pairs_to_evaluate(int first, int end, PairToEvaluate* out) const;
+  /// Evaluates lane_count<Real> pairs at once, adding to the wrenches `on_chunk[owner − first]`.
+  template <class Real>
+  [[gnu::always_inline]] inline void add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int first,
+                                                       ContactTable& contacts, ChunkTotals& totals, Wrench* on_chunk);
+  [[gnu::always_inline]] inline void add_wall_contacts(int i, double dt_s, ContactTable& contacts, ChunkTotals& totals,
+                                                       Wrench& on_i);
+  void add_reactions();
+  void compact_contact_tables();
 
   Scenario scenario_;
   SoftEngineOptions options_;
@@ -87,19 +99,21 @@ class SoftEngine final : public Engine {
   std::vector<Eigen::Vector3d> x_, v_, w_, force_, torque_;
   std::vector<double> radius_, mass_, inv_mass_, inv_inertia_;
   NeighbourList neighbours_;
-  /// The force and torque each pair's contact puts on its partner, stored by the pair's
-  /// partner slot and gathered after the pairs. A pair's entry is written whenever its
-  /// contact is evaluated, which includes the step it comes apart (a zero reaction), and
-  /// zeroed at each rebuild: so the entries of pairs not evaluated are zero, and the
-  /// gather adds every slot without asking which pairs touch.
-  std::vector<Wrench> reactions_;
+  /// The open contacts of each chunk's spheres, pairs and walls, with the reactions the
+  /// pair contacts put on their partners (added to the partners after the chunks, in
+  /// chunk order).
+  std::vector<ContactTable> contact_tables_;
+  ContactTable compacted_table_;  ///< where compact_contact_tables builds each chunk's table
   std::vector<ChunkTotals> chunk_totals_;
+  /// Per thread: the pairs of its current chunk to evaluate (as long as the chunk's pairs).
+  std::vector<std::vector<PairToEvaluate>> pairs_to_evaluate_;
+  int most_pairs_in_a_chunk_ = 0;
   std::vector<Eigen::Vector3d> x_at_rebuild_;
   bool needs_rebuild_ = true;
   double host_z_at_rebuild_ = 0.0;
-  /// Contact history of each particle with the side wall, the bottom and the top.
-  std::array<std::vector<ContactHistory>, 3> wall_history_;
-  std::array<std::vector<unsigned char>, 3> wall_touching_;
+  /// Each particle's open contacts with the side wall, the bottom and the top, in its
+  /// chunk's table (ContactTable::none if apart).
+  std::vector<std::array<int, 3>> wall_contacts_;
 
   // Host.
   HostState host_;

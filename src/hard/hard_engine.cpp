@@ -707,7 +707,7 @@ void HardEngine::stick_to_host(const std::vector<int>& members, std::uint8_t hol
   // its spin, and the host its vertical momentum. Each part of the loss is impact where
   // it is normal to a holding wall (horizontal at the side wall, vertical at a cap or the
   // bed) and friction otherwise; the spin is friction.
-  const HostState host = host_.at(t_s_);
+  const HostState host = host_now();
   double mass = 0.0;
   Eigen::Vector3d momentum = Eigen::Vector3d::Zero();
   for (const int k : members) {

@@ -113,8 +113,7 @@ struct GapSample {
 inline double jerk_limited_step(double value, double rate, double acceleration, double jerk_bound) {
   if (!(acceleration > 0.0)) return 0.0;
   const double horizon = jerk_bound > 0.0 ? 1.5 * acceleration / jerk_bound : never;
-  const double quarter = 0.25 * acceleration;
-  const double discriminant = rate * rate - 4.0 * quarter * value;
+  const double discriminant = rate * rate - acceleration * value;  // of value + rate·s + ¼ a s²
   if (rate >= 0.0 || discriminant < 0.0) return horizon;
   return std::min(horizon, 2.0 * value / (std::sqrt(discriminant) - rate));  // the first root
 }

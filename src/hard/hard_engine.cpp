@@ -56,7 +56,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       last_collision_s_(initial.size(), -never),
       riding_(initial.size(), 0),
       jam_{-1.0, std::vector<int>(initial.size(), 0), std::vector<std::vector<int>>(initial.size()),
-           std::vector<std::uint8_t>(initial.size(), 0), {}},
+           std::vector<std::uint8_t>(initial.size(), 0), {}, {}},
       in_jam_(initial.size(), 0),
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
@@ -64,8 +64,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       free_cells_(grid_.cell_count() + 1, static_cast<int>(initial.size())),  // + enter_cell's empty stand-in
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       queue_(static_cast<int>(initial.size())),
-      neighbours_(initial.size() + CellMembers::copy_width),
+      neighbours_(initial.size() + std::max(CellMembers::copy_width, screen_width)),
       meeting_pairs_(initial.size()),
+      screen_scratch_(static_cast<int>(initial.size())),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
@@ -279,22 +280,29 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   const Eigen::Vector3d& g = gravity_m_s2_;
 
   // The next face crossing bounds the predictions of walls and host: the sphere is
-  // predicted anew there.
+  // predicted anew there. Lanes pair the faces in x and y, and the face in z with a
+  // guard on the host (see below); a cell at the grid's side has no face there.
+  const HostState host = host_now();
+  const double envelope = host_speed_envelope_m_s_;
+  const Lanes2 to_lower_xy = time_to_close(Lanes2{x.x() - grid_.x_lower_m(c.ix), x.y() - grid_.x_lower_m(c.iy)},
+                                           Lanes2{v.x(), v.y()}, Lanes2{g.x(), g.y()});
+  const Lanes2 to_upper_xy = time_to_close(Lanes2{grid_.x_lower_m(c.ix + 1) - x.x(), grid_.x_lower_m(c.iy + 1) - x.y()},
+                                           Lanes2{-v.x(), -v.y()}, Lanes2{-g.x(), -g.y()});
+  const Lanes2 to_lower_z = time_to_close(
+      Lanes2{x.z() - grid_.z_lower_m(c.iz), x.z() - r - host.z_m - bed_depth_bound_m_}, Lanes2{v.z(), v.z() - envelope},
+      Lanes2{g.z(), g.z()});
+  const Lanes2 to_upper_z =
+      time_to_close(Lanes2{grid_.z_lower_m(c.iz + 1) - x.z(), host.z_m + cavity_.height_m() - bed_depth_bound_m_ - x.z() - r},
+                    Lanes2{-v.z(), -v.z() - envelope}, Lanes2{-g.z(), -g.z()});
+  const std::array<double, 6> to_face{c.ix > 0 ? to_lower_xy[0] : never, c.ix < grid_.nx() - 1 ? to_upper_xy[0] : never,
+                                      c.iy > 0 ? to_lower_xy[1] : never, c.iy < grid_.ny() - 1 ? to_upper_xy[1] : never,
+                                      to_lower_z[0],                     to_upper_z[0]};
   double crossing = never;
   int face = -1;
-  const std::array<int, 3> index{c.ix, c.iy, c.iz};
-  for (int axis = 0; axis < 3; ++axis) {
-    const bool periodic = axis == 2;
-    const double lower = periodic ? grid_.z_lower_m(index[axis]) : grid_.x_lower_m(index[axis]);
-    const double upper = periodic ? grid_.z_lower_m(index[axis] + 1) : grid_.x_lower_m(index[axis] + 1);
-    if (periodic || index[axis] > 0) {
-      const double s = time_to_close(x[axis] - lower, v[axis], g[axis]);
-      if (s < crossing) crossing = s, face = 2 * axis;
-    }
-    if (periodic || index[axis] < grid_.nx() - 1) {
-      const double s = time_to_close(upper - x[axis], -v[axis], -g[axis]);
-      if (s < crossing) crossing = s, face = 2 * axis + 1;
-    }
+  for (int k = 0; k < 6; ++k) {
+    const bool sooner = to_face[k] < crossing;
+    crossing = sooner ? to_face[k] : crossing;
+    face = sooner ? k : face;
   }
   const double horizon = t + crossing;
   t_cross_s_[i] = horizon;
@@ -304,20 +312,11 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   // itself does not: it neither approaches nor recedes), then only those spheres'
   // contact times, however late: a contact is exact whichever cells the two are in.
   int* const candidates = neighbours_.data();
-  int candidate_count = 0;
-  for (const int cell : new_cells) candidate_count += free_cells_.copy_members(cell, candidates + candidate_count);
-  // Among many spheres the records are cache misses: ask for all of them at once.
-  for (int k = 0; k < candidate_count; ++k) __builtin_prefetch(&particles_.record(candidates[k]));
-  int meeting_count = 0;
-  for (int k = 0; k < candidate_count; ++k) {
-    const int j = candidates[k];
-    const Ballistic fj = flight(j);
-    const double contact = r + particles_.radius_m[j];
-    const PairQuadratic pair = PairQuadratic::of(x - fj.position_at(t, g), v - fj.velocity_at(t, g), contact);
-    candidates[meeting_count] = j;
-    meeting_pairs_[meeting_count] = pair;
-    meeting_count += pair.meets(contact);
-  }
+  const int candidate_count = new_cells.size() == std::tuple_size_v<Around>
+                                  ? free_cells_.gather<std::tuple_size_v<Around>>(new_cells.data(), candidates)
+                                  : free_cells_.gather<std::tuple_size_v<Layer>>(new_cells.data(), candidates);
+  const int meeting_count = screen_neighbours({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count,
+                                              screen_scratch_, meeting_pairs_.data());
   for (int k = 0; k < meeting_count; ++k) {
     const int j = candidates[k];
     push({t + meeting_pairs_[k].time_s(), i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
@@ -333,14 +332,11 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
     if (wall.contact) push({wall.t_s, i, 0, counter_[i], 0, EventKind::side_wall});
   }
 
-  // Caps and the resting bed: a guard from the host's speed envelope, or exact predictions.
+  // Caps and the resting bed: a guard from the host's speed envelope (when the sphere
+  // could reach the bed's farthest extent if the host moved at the envelope's speed),
+  // or exact predictions.
   ++host_stamp_[i];  // whatever host-dependent event i had is replaced
-  const HostState host = host_now();
-  const double envelope = host_speed_envelope_m_s_;
-  const double to_floor = time_to_close(x.z() - r - host.z_m - bed_depth_bound_m_, v.z() - envelope, g.z());
-  const double to_ceiling = time_to_close(host.z_m + cavity_.height_m() - bed_depth_bound_m_ - x.z() - r,
-                                          -v.z() - envelope, -g.z());
-  const double guard = t + std::min(to_floor, to_ceiling);
+  const double guard = t + std::min(to_lower_z[1], to_upper_z[1]);
   if (guard <= t) {
     tiers_[0].members.insert(i);
     predict_host_relative(i);
@@ -585,6 +581,8 @@ void HardEngine::collide_spheres(int i, int j) {
 }
 
 bool HardEngine::note_collision(int i, int j, std::uint8_t hold) {
+  // Most instants see one collision, which cannot be a jam: it is only set aside, and
+  // entered in the spheres' records when a second one comes at the same instant.
   if (jam_.t_s != t_s_) {
     for (const int k : jam_.involved) {
       jam_.count[k] = 0;
@@ -593,7 +591,17 @@ bool HardEngine::note_collision(int i, int j, std::uint8_t hold) {
     }
     jam_.involved.clear();
     jam_.t_s = t_s_;
+    jam_.first = {i, j, hold, true};
+    return false;
   }
+  if (jam_.first.pending) {
+    jam_.first.pending = false;
+    record_collision(jam_.first.i, jam_.first.j, jam_.first.hold);
+  }
+  return record_collision(i, j, hold);
+}
+
+bool HardEngine::record_collision(int i, int j, std::uint8_t hold) {
   const auto count = [this](int k) {
     if (jam_.count[k]++ == 0) jam_.involved.push_back(k);
   };
@@ -864,7 +872,7 @@ void HardEngine::cross_face(int i, Face face) {
   constexpr std::array<int, 3> stride{1, 3, 9};  // in Around, of x, y and z
   const int axis = face / 2, beyond = (face % 2 == 1 ? 2 : 0) * stride[axis];
   const int u_stride = stride[(axis + 1) % 3], w_stride = stride[(axis + 2) % 3];
-  std::array<int, 9> entered{};
+  Layer entered{};
   for (int u = 0; u < 3; ++u) {
     for (int w = 0; w < 3; ++w) entered[3 * u + w] = around_[i][beyond + u * u_stride + w * w_stride];
   }

@@ -78,6 +78,27 @@ class CellMembers {
     return c.count;
   }
   static constexpr int copy_width = 4;
+  /// The members of the `cell_count` cells `cells` written one after another to `out`
+  /// (room for all of them and copy_width more), and how many there are. Unrolled, and
+  /// without looking at a cell's count but to add it: the rare cell with overflow members
+  /// sends the whole gather down copy_members' path instead.
+  template <int cell_count>
+  int gather(const int* cells, int* out) const {
+    int count = 0;
+    bool overflow = false;
+#pragma GCC unroll 27
+    for (int k = 0; k < cell_count; ++k) {
+      const Cell& c = cells_[cells[k]];
+      std::memcpy(out + count, &c, sizeof(Cell));
+      count += c.count;
+      overflow |= c.count > inline_capacity;
+    }
+    if (overflow) {
+      count = 0;
+      for (int k = 0; k < cell_count; ++k) count += copy_members(cells[k], out + count);
+    }
+    return count;
+  }
 
  private:
   static constexpr int none = -1;

@@ -26,6 +26,19 @@ inline constexpr double never = std::numeric_limits<double>::infinity();
 /// the same instant (m/s).
 inline constexpr double min_approach_speed_m_s = 1e-12;
 
+/// Two doubles side by side in one SSE2 register (a GCC vector extension); each lane
+/// rounds exactly as a double would.
+using Lanes2 = double __attribute__((vector_size(2 * sizeof(double))));
+/// What comparing Lanes2 gives: all ones in the lanes where it holds.
+using Mask2 = decltype(Lanes2{} < Lanes2{});
+inline double sqrt_lanes(double a) { return std::sqrt(a); }
+inline Lanes2 sqrt_lanes(Lanes2 a) { return Lanes2{std::sqrt(a[0]), std::sqrt(a[1])}; }  // one sqrtpd
+/// `mask ? a : b`, lane by lane, without branches (GCC may branch on a vector ?: lane by lane).
+inline double select(bool mask, double a, double b) { return mask ? a : b; }
+inline Lanes2 select(Mask2 mask, Lanes2 a, Lanes2 b) {
+  return reinterpret_cast<Lanes2>((reinterpret_cast<Mask2>(a) & mask) | (reinterpret_cast<Mask2>(b) & ~mask));
+}
+
 /// A sphere's free flight from (x0, v0) at t0 under gravity g.
 struct Ballistic {
   Eigen::Vector3d x0_m;
@@ -40,17 +53,21 @@ struct Ballistic {
 
 // Inline: these two run for every neighbour and cell face at every prediction.
 
-/// The first s ≥ 0 at which gap + rate·s + ½ accel·s² reaches 0, or `never`. A gap
-/// that round-off made negative counts as 0 (touching).
-inline double time_to_close(double gap, double rate, double accel) {
-  gap = std::max(gap, 0.0);
-  if (rate < 0) {
-    const double discriminant = rate * rate - 2.0 * accel * gap;
-    if (discriminant < 0) return never;
-    return 2.0 * gap / (std::sqrt(discriminant) - rate);  // the smaller root, without cancellation
-  }
-  if (accel >= 0) return never;
-  return (rate + std::sqrt(rate * rate - 2.0 * accel * gap)) / -accel;
+/// The first s ≥ 0 at which gap + rate·s + ½ accel·s² reaches 0, or `never`, for a
+/// double or lane by lane. A gap that round-off made negative counts as 0 (touching).
+/// Both roots are computed and one is selected: whether a sphere approaches a face is a
+/// coin toss, which lanes (compiled to blends) do not branch on.
+template <class Real>
+[[gnu::always_inline]] inline Real time_to_close(Real gap, Real rate, Real accel) {
+  const Real zero{};
+  gap = select(gap < 0.0, zero, gap);
+  const Real discriminant = rate * rate - 2.0 * accel * gap;
+  const Real root = sqrt_lanes(select(discriminant < 0.0, zero, discriminant));
+  const Real closing = 2.0 * gap / (root - rate);  // the smaller root, without cancellation
+  const Real opening = (rate + root) / -accel;     // moving away, turned back by accel < 0
+  const auto approaching = rate < 0.0;
+  const auto misses = (approaching & (discriminant < 0.0)) | ((rate >= 0.0) & (accel >= 0.0));
+  return select(misses, zero + never, select(approaching, closing, opening));
 }
 
 /// The contact test of two spheres whose centres are dx = x_i − x_j apart and move with

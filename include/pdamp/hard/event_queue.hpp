@@ -4,20 +4,31 @@
 /// Predictions go out of date all the time (a collision voids every event of its two
 /// spheres), and most events never happen. So events are kept per owner (the sphere an
 /// event was predicted for; one more owner for the host's events) in a small unsorted
-/// list, and a Boost.Heap (a mutable 4-ary `d_ary_heap`, one handle per owner) orders only
-/// the owners, by their earliest event. Then
+/// list, and only each owner's earliest event is ordered. Then
 /// - when a sphere's trajectory changes, its own events are forgotten at once
-///   (`forget`), without touching the heap until the next look at the top;
+///   (`forget`), without touching the order until the next look at the top;
 /// - an owner's list is pruned of out-of-date events whenever it is re-keyed, so an
-///   event voided by its partner usually leaves without ever reaching the top;
-/// - the heap holds at most N + 1 entries, whatever the number of events.
+///   event voided by its partner usually leaves without ever reaching the top.
 /// Events still carry the trajectory counters they were predicted with: one that went out
 /// of date after its owner was last re-keyed still reaches the top and is dropped there
 /// (`HardEngine::is_current`).
+///
+/// The owners' earliest events are ordered by a calendar (Paul, J. Comput. Phys. 221,
+/// 2007): time is cut into buckets about as wide as the time in which a few events
+/// happen. Only the current bucket's entries are in a Boost.Heap; later ones wait,
+/// unsorted, in their bucket (or, beyond the calendar's reach, in a second Boost.Heap)
+/// until the current bucket runs dry. A re-keyed owner is simply entered again, with its
+/// new version; entries whose version is no longer their owner's are dropped wherever
+/// they are met. The heap a pop sifts through thus holds a handful of entries, not one
+/// per sphere: with ~N entries the sifting cost log N comparisons, most of them
+/// mispredicted branches.
 
+#include <algorithm>
+#include <bit>
 #include <boost/heap/d_ary_heap.hpp>
 #include <cstdint>
-#include <optional>
+#include <limits>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -62,7 +73,7 @@ class EventQueue {
  public:
   /// Owners 0 … particle_count − 1 are the spheres; events with i < 0 belong to the host.
   explicit EventQueue(int particle_count)
-      : lists_(particle_count + 1), handle_(particle_count + 1), dirty_flag_(particle_count + 1, 0) {
+      : lists_(particle_count + 1), keyed_(particle_count + 1), buckets_(std::bit_ceil(static_cast<std::size_t>(particle_count) + 1)) {
     if (particle_count > max_particles) throw std::length_error("the event queue orders at most 2^29 - 2 spheres");
   }
   static constexpr int max_particles = (1 << 29) - 2;
@@ -79,10 +90,11 @@ class EventQueue {
   }
   void clear() {
     for (auto& list : lists_) list.clear();
-    for (const int owner : dirty_) dirty_flag_[owner] = 0;
+    for (Keyed& k : keyed_) k = Keyed{k.version + 1};
     dirty_.clear();
-    for (const Entry& e : heap_) handle_[owner_of(e.event)].reset();
-    heap_.clear();
+    for (auto& bucket : buckets_) bucket.clear();
+    current_.clear();
+    beyond_.clear();
   }
 
   /// The earliest event, or nullptr if there is none. Owners changed since the last call
@@ -91,46 +103,66 @@ class EventQueue {
   const Event* top(Current current) {
     for (const int owner : dirty_) rekey(owner, current);
     dirty_.clear();
-    return heap_.empty() ? nullptr : &heap_.top().event;
+    for (;;) {
+      while (!current_.empty() && !is_keyed(current_.top())) current_.pop();
+      if (!current_.empty()) break;
+      if (!next_bucket()) return nullptr;
+    }
+    const Entry& top = current_.top();
+    return &lists_[top.owner][keyed_[top.owner].index];
   }
   /// Removes the event `top` returned.
   void pop() {
-    const Entry& entry = heap_.top();
-    const int owner = owner_of(entry.event);
-    std::vector<Event>& list = lists_[owner];
-    list[entry.index] = list.back();
+    const Entry top = current_.top();
+    current_.pop();
+    std::vector<Event>& list = lists_[top.owner];
+    Keyed& keyed = keyed_[top.owner];
+    list[keyed.index] = list.back();
     list.pop_back();
-    mark_dirty(owner);
+    keyed = Keyed{keyed.version + 1};
+    mark_dirty(static_cast<int>(top.owner));
+    t_last_pop_s_ = top.t_s;
+    adapt_bucket_width(top.t_s);
   }
 
  private:
+  /// An owner's earliest event as the calendar orders it; out of date once its version is
+  /// no longer the owner's.
   struct Entry {
-    Event event;          ///< the owner's earliest event (a copy, so that the heap compares entries alone)
-    std::uint64_t tie;    ///< its tie_key
-    std::uint32_t index;  ///< its position in the owner's list
+    double t_s;
+    std::uint64_t tie;  ///< tie_key of the event
+    std::uint32_t owner;
+    std::uint32_t version;
+  };
+  /// What an owner's entry in the calendar stands for.
+  struct Keyed {
+    std::uint32_t version = 0;
+    bool entered = false;     ///< an entry with this version is in the calendar
+    std::uint8_t dirty = 0;   ///< re-key at the next top()
+    std::uint32_t index = 0;  ///< the event's position in the owner's list
+    double t_s = 0.0;
+    std::uint64_t tie = 0;
   };
   /// Boost.Heap puts the greatest element on top; here that is the earliest event. Free
-  /// of branches (`earlier`, with the tie key at hand): sifting compares coin tosses.
+  /// of branches (`earlier`, with the tie key at hand).
   struct Later {
     bool operator()(const Entry& a, const Entry& b) const {
-      return (b.event.t_s < a.event.t_s) | ((b.event.t_s == a.event.t_s) & (b.tie < a.tie));
+      return (b.t_s < a.t_s) | ((b.t_s == a.t_s) & (b.tie < a.tie));
     }
   };
-  /// Mutable, for re-keying an owner in place. Measured on pdamp_bench (N = 1,000): as fast
-  /// as arities 2 and 8 and the hand-written 4-ary heap it replaced (within ~3 %);
-  /// pairing, Fibonacci and skew heaps were 10–20 % slower.
-  using Heap = boost::heap::d_ary_heap<Entry, boost::heap::arity<4>, boost::heap::mutable_<true>,
-                                       boost::heap::compare<Later>>;
+  using Heap = boost::heap::d_ary_heap<Entry, boost::heap::arity<4>, boost::heap::compare<Later>>;
 
   int owner_of(const Event& e) const { return e.i >= 0 ? e.i : static_cast<int>(lists_.size()) - 1; }
   void mark_dirty(int owner) {
-    if (!dirty_flag_[owner]) dirty_.push_back(owner);
-    dirty_flag_[owner] = 1;
+    if (!keyed_[owner].dirty) dirty_.push_back(owner);
+    keyed_[owner].dirty = 1;
   }
+  bool is_keyed(const Entry& e) const { return keyed_[e.owner].version == e.version; }
 
   template <class Current>
   void rekey(int owner, Current current) {
-    dirty_flag_[owner] = 0;
+    Keyed& keyed = keyed_[owner];
+    keyed.dirty = 0;
     std::vector<Event>& list = lists_[owner];
     std::size_t best = 0;
     for (std::size_t k = 0; k < list.size();) {
@@ -142,25 +174,105 @@ class EventQueue {
       if (k > 0 && earlier(list[k], list[best])) best = k;
       ++k;
     }
-    std::optional<Heap::handle_type>& handle = handle_[owner];
     if (list.empty()) {
-      if (handle) heap_.erase(*handle);
-      handle.reset();
+      if (keyed.entered) keyed = Keyed{keyed.version + 1};
       return;
     }
-    const Entry entry{list[best], tie_key(list[best]), static_cast<std::uint32_t>(best)};
-    if (handle) {
-      heap_.update(*handle, entry);
+    const Event& first = list[best];
+    const std::uint64_t tie = tie_key(first);
+    keyed.index = static_cast<std::uint32_t>(best);
+    if (keyed.entered && keyed.t_s == first.t_s && keyed.tie == tie) return;  // the same event, perhaps moved
+    keyed = Keyed{keyed.version + 1, true, 0, static_cast<std::uint32_t>(best), first.t_s, tie};
+    enter({first.t_s, tie, static_cast<std::uint32_t>(owner), keyed.version});
+  }
+
+  // The calendar.
+  /// Bucket n holds the entries with floor((t − origin) / width) = n.
+  double bucket_of(double t_s) const { return std::floor((t_s - origin_s_) / width_s_); }
+  void enter(const Entry& e) {
+    const double n = bucket_of(e.t_s);
+    if (n <= current_bucket_) {
+      current_.push(e);
+    } else if (n < current_bucket_ + static_cast<double>(buckets_.size())) {
+      buckets_[slot(n)].push_back(e);
     } else {
-      handle = heap_.push(entry);
+      beyond_.push(e);
+    }
+  }
+  /// The slot of a bucket within reach (their number is a power of two).
+  std::size_t slot(double bucket) const { return static_cast<std::size_t>(static_cast<std::int64_t>(bucket)) & (buckets_.size() - 1); }
+  /// Makes the next bucket with entries current; false if there are none.
+  bool next_bucket() {
+    const double reach = static_cast<double>(buckets_.size());
+    for (std::size_t step = 0; step < buckets_.size(); ++step) {
+      ++current_bucket_;
+      // Entries beyond the calendar's reach come within it as it moves on.
+      for (; !beyond_.empty(); beyond_.pop()) {
+        const Entry& e = beyond_.top();
+        if (!is_keyed(e)) continue;
+        const double n = bucket_of(e.t_s);
+        if (n >= current_bucket_ + reach) break;
+        n <= current_bucket_ ? current_.push(e) : buckets_[slot(n)].push_back(e);
+      }
+      std::vector<Entry>& bucket = buckets_[slot(current_bucket_)];
+      for (const Entry& e : bucket) {
+        if (is_keyed(e)) current_.push(e);
+      }
+      bucket.clear();
+      if (!current_.empty()) return true;
+    }
+    // A whole calendar without entries: the buckets are too narrow for what comes next.
+    // The calendar starts again at the earliest entry beyond it (bucket numbers stay
+    // small, so counting them in doubles stays exact), with buckets at least four times
+    // as wide as the gap just crossed.
+    while (!beyond_.empty() && !is_keyed(beyond_.top())) beyond_.pop();
+    if (beyond_.empty()) return false;
+    const double t_next_s = beyond_.top().t_s;
+    refile(t_next_s, std::max(width_s_, 4.0 * (t_next_s - t_last_pop_s_)));
+    return true;
+  }
+  /// Keeps the buckets about `events_per_bucket` events wide, from the rate at which
+  /// events have been popped lately: refiled when the width is off by more than twice.
+  void adapt_bucket_width(double t_s) {
+    constexpr double events_per_bucket = 4.0;
+    if (pops_ == 0) t_first_pop_s_ = t_s;
+    if (++pops_ < static_cast<std::int64_t>(buckets_.size()) + 64) return;
+    const double span = t_s - t_first_pop_s_;
+    pops_ = 0;
+    if (!(span > 0.0)) return;
+    const double width = events_per_bucket * span / static_cast<double>(buckets_.size() + 64);
+    if (width > 0.5 * width_s_ && width < 2.0 * width_s_) return;
+    refile(t_s, width);
+  }
+  /// Starts the calendar afresh at t_s with buckets `width_s` wide, entering every valid entry again.
+  void refile(double t_s, double width_s) {
+    std::vector<Entry> entries;
+    for (; !current_.empty(); current_.pop()) entries.push_back(current_.top());
+    for (; !beyond_.empty(); beyond_.pop()) entries.push_back(beyond_.top());
+    for (std::vector<Entry>& bucket : buckets_) {
+      entries.insert(entries.end(), bucket.begin(), bucket.end());
+      bucket.clear();
+    }
+    origin_s_ = t_s;
+    width_s_ = width_s;
+    current_bucket_ = 0.0;
+    for (const Entry& e : entries) {
+      if (is_keyed(e)) enter(e);
     }
   }
 
-  std::vector<std::vector<Event>> lists_;                 ///< each owner's events, unsorted
-  Heap heap_;                                             ///< owners with events, by their earliest
-  std::vector<std::optional<Heap::handle_type>> handle_;  ///< each owner's entry in heap_, if it has one
-  std::vector<int> dirty_;                                ///< owners whose events changed since the last top()
-  std::vector<std::uint8_t> dirty_flag_;
+  std::vector<std::vector<Event>> lists_;  ///< each owner's events, unsorted
+  std::vector<Keyed> keyed_;
+  std::vector<int> dirty_;  ///< owners whose events changed since the last top()
+  std::vector<std::vector<Entry>> buckets_;  ///< the calendar's later buckets, one slot per bucket modulo their number
+  Heap current_;  ///< entries of the current bucket (and any earlier: see enter)
+  Heap beyond_;   ///< entries past the calendar's last bucket
+  double origin_s_ = 0.0;
+  double width_s_ = std::numeric_limits<double>::infinity();  ///< until events have been timed, one bucket holds all
+  double current_bucket_ = 0.0;
+  std::int64_t pops_ = 0;
+  double t_first_pop_s_ = 0.0;
+  double t_last_pop_s_ = 0.0;
 };
 
 }  // namespace pdamp::hard

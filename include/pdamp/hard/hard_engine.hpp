@@ -43,6 +43,7 @@
 #include "pdamp/hard/collision_rules.hpp"
 #include "pdamp/hard/event_prediction.hpp"
 #include "pdamp/hard/event_queue.hpp"
+#include "pdamp/hard/neighbour_screen.hpp"
 #include "pdamp/hard/packed_particles.hpp"
 #include "pdamp/hard/particle_set.hpp"
 #include "pdamp/model/cavity.hpp"
@@ -102,7 +103,8 @@ class HardEngine final : public Engine {
   /// Predicts every event of free sphere i anew (its trajectory changed).
   void predict(int i) { predict(i, around_[i]); }
   /// Predicts sphere i's events anew, but its contacts only with the spheres in
-  /// `new_cells` (it has just crossed into a cell whose other neighbours it already had).
+  /// `new_cells` (it has just crossed into a cell whose other neighbours it already had):
+  /// an Around or a Layer.
   void predict(int i, std::span<const int> new_cells);
   /// Predicts free sphere i's host-dependent event, starting the descent through the
   /// tiers at `first_level` (a tier it is in: the levels above it are known to hold it).
@@ -131,6 +133,8 @@ class HardEngine final : public Engine {
   /// host (j < 0; `hold` says which part); true once i or j has collided more than
   /// jam_repeats times at it (wedged in a jammed cluster).
   bool note_collision(int i, int j, std::uint8_t hold = 0);
+  /// note_collision's record of one collision in the spheres' counts, partners and holds.
+  bool record_collision(int i, int j, std::uint8_t hold);
   /// The jammed cluster of i (free spheres linked by collisions at this instant) stops
   /// all relative motion: a perfectly inelastic, sticking merge into a rigid body, which
   /// also sticks to the host if a wall or the bed holds any of its spheres.
@@ -177,6 +181,8 @@ class HardEngine final : public Engine {
   /// gathering the neighbours is a loop of fixed length and the layer entered at a face
   /// crossing is at fixed places.
   using Around = std::array<int, 27>;
+  /// The 3 × 3 cells of Around beyond one face: those a face crossing brings in.
+  using Layer = std::array<int, 9>;
   std::vector<Around> around_;
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
@@ -190,6 +196,12 @@ class HardEngine final : public Engine {
     std::vector<std::vector<int>> partners;
     std::vector<std::uint8_t> hold;
     std::vector<int> involved;  ///< spheres with a count, to reset them when time moves on
+    /// The instant's first collision, until a second one enters it in the records.
+    struct {
+      int i = 0, j = 0;
+      std::uint8_t hold = 0;
+      bool pending = false;
+    } first;
   } jam_;
   std::vector<std::uint8_t> in_jam_;  ///< scratch for merge_jam
   /// Spheres whose host-dependent events are lower bounds, valid while the host strays
@@ -215,6 +227,7 @@ class HardEngine final : public Engine {
   EventQueue queue_;
   std::vector<int> neighbours_;  ///< predict's scratch: the free spheres around the one predicted
   std::vector<PairQuadratic> meeting_pairs_;  ///< predict's scratch: the contact tests of those it meets
+  ScreenScratch screen_scratch_;
   double contact_tolerance_m_;
   double max_radius_m_;
   double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart

@@ -1,0 +1,55 @@
+#pragma once
+/// Which of a sphere's neighbours it will meet: the contact test of every prediction
+/// (PairQuadratic::meets), run over the neighbours four at a time in SIMD lanes.
+///
+/// Each lane performs the same IEEE operations in the same order as
+/// PairQuadratic::of on Ballistic::position_at and velocity_at (the library is built
+/// without floating-point contraction), so the answer is the same bits whichever
+/// instruction set runs it: the baseline's SSE2 (two registers per four lanes) or, where
+/// the processor has them, AVX2 or AVX-512, chosen once at run time.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "pdamp/hard/event_prediction.hpp"
+#include "pdamp/hard/packed_particles.hpp"
+
+namespace pdamp::hard {
+
+/// The sphere whose neighbours are screened, at time t_s.
+struct ScreenedSphere {
+  Eigen::Vector3d position_m, velocity_m_s;
+  double radius_m, t_s;
+  int index;  ///< the sphere itself, which pads the neighbours to whole groups of lanes
+};
+
+/// Lanes per group.
+inline constexpr int screen_width = 4;
+
+/// screen_neighbours' working memory, for up to `capacity` neighbours.
+struct ScreenScratch {
+  explicit ScreenScratch(int capacity)
+      : b(capacity + screen_width), c(capacity + screen_width), discriminant(capacity + screen_width),
+        meets((capacity + screen_width) / 64 + 1) {}
+  std::vector<double> b, c, discriminant;
+  std::vector<std::uint64_t> meets;
+};
+
+/// Screens `neighbours[0 … count)` (the array must have room for screen_width more)
+/// against `sphere`, under gravity `g`: moves those it meets to the front of
+/// `neighbours`, in their order, with their quadratics in `meeting`, and returns how
+/// many it meets.
+int screen_neighbours(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
+                      int* neighbours, int count, ScreenScratch& scratch, PairQuadratic* meeting);
+
+/// The instruction set screen_neighbours uses on this processor: "avx2" or "sse2".
+const char* screen_instruction_set();
+
+/// screen_neighbours on a given instruction set (for tests: each must give the same
+/// bits); false if this processor lacks it.
+bool screen_neighbours_with(const char* instruction_set, const ScreenedSphere& sphere, const Eigen::Vector3d& g,
+                            const FlightRecord* records, int* neighbours, int count, ScreenScratch& scratch,
+                            PairQuadratic* meeting, int& meeting_count);
+
+}  // namespace pdamp::hard

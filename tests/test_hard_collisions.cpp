@@ -138,7 +138,10 @@ TEST_CASE("time_to_close in lanes gives each lane the bits of the scalar functio
     const Lanes2 gap{u(rng), trial % 3 == 0 ? 0.0 : u(rng)}, rate{u(rng), trial % 5 == 0 ? 0.0 : u(rng)};
     const Lanes2 accel{trial % 7 == 0 ? 0.0 : u(rng), u(rng)};
     const Lanes2 lanes = time_to_close(gap, rate, accel);
-    for (int l = 0; l < 2; ++l) CHECK(std::bit_cast<std::uint64_t>(lanes[l]) == std::bit_cast<std::uint64_t>(time_to_close(gap[l], rate[l], accel[l])));
+    for (int l = 0; l < 2; ++l) {
+      const double scalar = time_to_close(gap[l], rate[l], accel[l]);
+      CHECK(std::bit_cast<std::uint64_t>(lanes[l]) == std::bit_cast<std::uint64_t>(scalar));
+    }
   }
 }
 
@@ -174,7 +177,7 @@ TEST_CASE("neighbour screen: every instruction set finds the meetings of the sca
   REQUIRE(expected.size() <= 40);
   ScreenScratch scratch(n);
   for (const char* isa : {"sse2", "avx2"}) {
-    for (const int count : {n - 1, 1, 4, 5, 33}) {  // whole groups of lanes and ragged ones
+    for (const int count : {n - 1, 1, 4, 5, 8, 9, 33}) {  // whole groups of lanes and ragged ones
       CAPTURE(isa);
       CAPTURE(count);
       std::vector<int> neighbours(n + screen_width);

@@ -1,103 +1,120 @@
 #include "pdamp/hard/neighbour_screen.hpp"
 
+#include <immintrin.h>
+
 #include <bit>
 #include <cstring>
 #include <string_view>
 
-// Four-double vectors are passed between the inline helpers below, which never leave
-// this file: GCC's note that their ABI differs without AVX concerns no caller.
+// Vectors are passed between the inline helpers below, which never leave this file:
+// GCC's note that their ABI differs without AVX concerns no caller.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace pdamp::hard {
 namespace {
 
-static_assert(screen_width == 4, "the transposes below take four records at a time");
-using Lanes = double __attribute__((vector_size(4 * sizeof(double))));
+constexpr int width = screen_width;
+using Lanes = double __attribute__((vector_size(width * sizeof(double))));
+using Mask = decltype(Lanes{} < Lanes{});
 
 [[gnu::always_inline]] inline Lanes splat(double a) { return Lanes{a, a, a, a}; }
 
-/// Four consecutive doubles of a record (32-byte aligned: records are 64-byte aligned).
 [[gnu::always_inline]] inline Lanes load(const double* from) {
   Lanes lanes;
   std::memcpy(&lanes, from, sizeof lanes);
   return lanes;
 }
+[[gnu::always_inline]] inline void store(double* to, Lanes lanes) { std::memcpy(to, &lanes, sizeof lanes); }
 
-/// Rows (a0 a1 a2 a3) of four records become columns: out[k] = (row0[k], row1[k], row2[k], row3[k]).
-[[gnu::always_inline]] inline void transpose(Lanes row0, Lanes row1, Lanes row2, Lanes row3, Lanes (&out)[4]) {
-  const Lanes even01 = __builtin_shufflevector(row0, row1, 0, 4, 2, 6);
-  const Lanes odd01 = __builtin_shufflevector(row0, row1, 1, 5, 3, 7);
-  const Lanes even23 = __builtin_shufflevector(row2, row3, 0, 4, 2, 6);
-  const Lanes odd23 = __builtin_shufflevector(row2, row3, 1, 5, 3, 7);
-  out[0] = __builtin_shufflevector(even01, even23, 0, 1, 4, 5);
-  out[1] = __builtin_shufflevector(odd01, odd23, 0, 1, 4, 5);
-  out[2] = __builtin_shufflevector(even01, even23, 2, 3, 6, 7);
-  out[3] = __builtin_shufflevector(odd01, odd23, 2, 3, 6, 7);
+/// The eight doubles of four records as eight vectors: x, y, z, t_ref, vx, vy, vz, radius.
+[[gnu::always_inline]] inline void transpose(const FlightRecord* const (&record)[width], Lanes (&field)[8]) {
+  for (int half = 0; half < 2; ++half) {  // x y z t_ref, then vx vy vz radius
+    const Lanes r0 = load(&record[0]->x_m + 4 * half), r1 = load(&record[1]->x_m + 4 * half);
+    const Lanes r2 = load(&record[2]->x_m + 4 * half), r3 = load(&record[3]->x_m + 4 * half);
+    const Lanes even01 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6),
+                odd01 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
+    const Lanes even23 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6),
+                odd23 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
+    field[4 * half + 0] = __builtin_shufflevector(even01, even23, 0, 1, 4, 5);
+    field[4 * half + 1] = __builtin_shufflevector(odd01, odd23, 0, 1, 4, 5);
+    field[4 * half + 2] = __builtin_shufflevector(even01, even23, 2, 3, 6, 7);
+    field[4 * half + 3] = __builtin_shufflevector(odd01, odd23, 2, 3, 6, 7);
+  }
 }
 
-[[gnu::always_inline]] inline void store(double* to, Lanes lanes) { std::memcpy(to, &lanes, sizeof lanes); }
+/// One bit per lane where the mask is set: AVX2 has an instruction for it. Not
+/// always_inline: inlined into the entry points below, which `flatten` compiles for
+/// their instruction set, while the generic screen itself is not.
+struct BitsSse2 {
+  static unsigned of(Mask m) { return static_cast<unsigned>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8)); }
+};
+struct BitsAvx2 {
+  [[gnu::target("avx2")]] static unsigned of(Mask m) {
+    return static_cast<unsigned>(_mm256_movemask_pd(reinterpret_cast<__m256d>(m)));
+  }
+};
 
 /// The screen, written once; each instruction set below compiles its own copy. A first
 /// pass tests every neighbour and keeps its quadratic and whether it meets (one bit in
 /// `scratch.meets`); a second moves those met to the front. Compacting in the first pass
 /// would chain every group's stores to the count of the group before.
-[[gnu::always_inline]] inline int screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g,
-                                         const FlightRecord* records, int* neighbours, int count,
-                                         ScreenScratch& scratch, PairQuadratic* meeting) {
-  for (int k = 0; k < screen_width; ++k) neighbours[count + k] = sphere.index;  // pads: never meets itself
-  const int padded = (count + screen_width - 1) / screen_width * screen_width;
+template <class Bits>
+int screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records, int* neighbours,
+           int count, ScreenScratch& scratch, PairQuadratic* meeting) {
+  for (int k = 0; k < width; ++k) neighbours[count + k] = sphere.index;  // pads: never meets itself
+  const int padded = (count + width - 1) / width * width;
   const Lanes t = splat(sphere.t_s), r = splat(sphere.radius_m);
   const Lanes x = splat(sphere.position_m.x()), y = splat(sphere.position_m.y()), z = splat(sphere.position_m.z());
   const Lanes vx = splat(sphere.velocity_m_s.x()), vy = splat(sphere.velocity_m_s.y()),
               vz = splat(sphere.velocity_m_s.z());
   const Lanes gx = splat(g.x()), gy = splat(g.y()), gz = splat(g.z());
-  std::uint64_t* const meets_bits = scratch.meets.data();
+  double* __restrict const b_out = scratch.b.data();
+  double* __restrict const c_out = scratch.c.data();
+  double* __restrict const discriminant_out = scratch.discriminant.data();
+  std::uint64_t* __restrict const meets_bits = scratch.meets.data();
   for (int first = 0; first < padded; first += 64) meets_bits[first / 64] = 0;
-  for (int first = 0; first < padded; first += screen_width) {
-    const int* const j = neighbours + first;
-    Lanes position[4], velocity[4];  // x, y, z, t_ref and vx, vy, vz, radius of the four
-    transpose(load(&records[j[0]].x_m), load(&records[j[1]].x_m), load(&records[j[2]].x_m),
-              load(&records[j[3]].x_m), position);
-    transpose(load(&records[j[0]].vx_m_s), load(&records[j[1]].vx_m_s), load(&records[j[2]].vx_m_s),
-              load(&records[j[3]].vx_m_s), velocity);
+  for (int first = 0; first < padded; first += width) {
+    const FlightRecord* record[width];
+    for (int l = 0; l < width; ++l) record[l] = records + neighbours[first + l];
+    Lanes field[8];  // x, y, z, t_ref, vx, vy, vz, radius of the group
+    transpose(record, field);
     // Ballistic::position_at and velocity_at, then PairQuadratic::of and meets, operation for operation.
-    const Lanes s = t - position[3], half_s = 0.5 * s;
-    const Lanes dx = x - (position[0] + s * (velocity[0] + half_s * gx));
-    const Lanes dy = y - (position[1] + s * (velocity[1] + half_s * gy));
-    const Lanes dz = z - (position[2] + s * (velocity[2] + half_s * gz));
-    const Lanes dvx = vx - (velocity[0] + s * gx), dvy = vy - (velocity[1] + s * gy), dvz = vz - (velocity[2] + s * gz);
-    const Lanes contact = r + velocity[3];
+    const Lanes s = t - field[3], half_s = 0.5 * s;
+    const Lanes dx = x - (field[0] + s * (field[4] + half_s * gx));
+    const Lanes dy = y - (field[1] + s * (field[5] + half_s * gy));
+    const Lanes dz = z - (field[2] + s * (field[6] + half_s * gz));
+    const Lanes dvx = vx - (field[4] + s * gx), dvy = vy - (field[5] + s * gy), dvz = vz - (field[6] + s * gz);
+    const Lanes contact = r + field[7];
     const Lanes b = (dx * dvx + dy * dvy) + dz * dvz;
     const Lanes c = ((dx * dx + dy * dy) + dz * dz) - contact * contact;
     const Lanes discriminant = b * b - ((dvx * dvx + dvy * dvy) + dvz * dvz) * c;
     const auto meets = (b < -min_approach_speed_m_s * contact) & ((c <= 0.0) | (discriminant >= 0.0));
-    store(scratch.b.data() + first, b);
-    store(scratch.c.data() + first, c);
-    store(scratch.discriminant.data() + first, discriminant);
-    const std::uint64_t bits = (meets[0] & 1) | (meets[1] & 2) | (meets[2] & 4) | (meets[3] & 8);
-    meets_bits[first / 64] |= bits << (first % 64);
+    store(b_out + first, b);
+    store(c_out + first, c);
+    store(discriminant_out + first, discriminant);
+    meets_bits[first / 64] |= static_cast<std::uint64_t>(Bits::of(meets)) << (first % 64);
   }
   int met = 0;
   for (int word = 0; word * 64 < padded; ++word) {
     for (std::uint64_t bits = meets_bits[word]; bits != 0; bits &= bits - 1) {
       const int k = 64 * word + std::countr_zero(bits);
       neighbours[met] = neighbours[k];
-      meeting[met] = {scratch.b[k], scratch.c[k], scratch.discriminant[k]};
+      meeting[met] = {b_out[k], c_out[k], discriminant_out[k]};
       ++met;
     }
   }
   return met;
 }
 
-int screen_sse2(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records, int* neighbours,
-                int count, ScreenScratch& scratch, PairQuadratic* meeting) {
-  return screen(sphere, g, records, neighbours, count, scratch, meeting);
+[[gnu::flatten]] int screen_sse2(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
+                                 int* neighbours, int count, ScreenScratch& scratch, PairQuadratic* meeting) {
+  return screen<BitsSse2>(sphere, g, records, neighbours, count, scratch, meeting);
 }
 
-[[gnu::target("avx2")]] int screen_avx2(const ScreenedSphere& sphere, const Eigen::Vector3d& g,
-                                         const FlightRecord* records, int* neighbours, int count,
-                                         ScreenScratch& scratch, PairQuadratic* meeting) {
-  return screen(sphere, g, records, neighbours, count, scratch, meeting);
+[[gnu::target("avx2"), gnu::flatten]] int screen_avx2(const ScreenedSphere& sphere, const Eigen::Vector3d& g,
+                                                      const FlightRecord* records, int* neighbours, int count,
+                                                      ScreenScratch& scratch, PairQuadratic* meeting) {
+  return screen<BitsAvx2>(sphere, g, records, neighbours, count, scratch, meeting);
 }
 
 using Screen = int (*)(const ScreenedSphere&, const Eigen::Vector3d&, const FlightRecord*, int*, int, ScreenScratch&,
@@ -106,11 +123,24 @@ using Screen = int (*)(const ScreenedSphere&, const Eigen::Vector3d&, const Flig
 struct InstructionSet {
   const char* name;
   Screen screen;
+  bool available;
 };
 
+/// Fastest first.
+const InstructionSet* instruction_sets() {
+  static const InstructionSet sets[] = {
+      {"avx2", screen_avx2, static_cast<bool>(__builtin_cpu_supports("avx2"))},
+      {"sse2", screen_sse2, true},
+  };
+  return sets;
+}
+
 const InstructionSet& best_instruction_set() {
-  static const InstructionSet best = __builtin_cpu_supports("avx2") ? InstructionSet{"avx2", screen_avx2}
-                                                                    : InstructionSet{"sse2", screen_sse2};
+  static const InstructionSet& best = *[] {
+    const InstructionSet* set = instruction_sets();
+    while (!set->available) ++set;
+    return set;
+  }();
   return best;
 }
 
@@ -126,13 +156,15 @@ const char* screen_instruction_set() { return best_instruction_set().name; }
 bool screen_neighbours_with(const char* instruction_set, const ScreenedSphere& sphere, const Eigen::Vector3d& g,
                             const FlightRecord* records, int* neighbours, int count, ScreenScratch& scratch,
                             PairQuadratic* meeting, int& meeting_count) {
-  const std::string_view name = instruction_set;
-  Screen screen = nullptr;
-  if (name == "sse2") screen = screen_sse2;
-  if (name == "avx2" && __builtin_cpu_supports("avx2")) screen = screen_avx2;
-  if (!screen) return false;
-  meeting_count = screen(sphere, g, records, neighbours, count, scratch, meeting);
-  return true;
+  for (const InstructionSet* set = instruction_sets();; ++set) {
+    if (std::string_view(set->name) != instruction_set) {
+      if (std::string_view(set->name) == "sse2") return false;  // the last: no such set
+      continue;
+    }
+    if (!set->available) return false;
+    meeting_count = set->screen(sphere, g, records, neighbours, count, scratch, meeting);
+    return true;
+  }
 }
 
 }  // namespace pdamp::hard

@@ -73,7 +73,9 @@ class EventQueue {
  public:
   /// Owners 0 … particle_count − 1 are the spheres; events with i < 0 belong to the host.
   explicit EventQueue(int particle_count)
-      : lists_(particle_count + 1), keyed_(particle_count + 1), buckets_(std::bit_ceil(static_cast<std::size_t>(particle_count) + 1)) {
+      : lists_(particle_count + 1),
+        keyed_(particle_count + 1),
+        buckets_(std::bit_ceil(static_cast<std::size_t>(particle_count) + 1)) {
     if (particle_count > max_particles) throw std::length_error("the event queue orders at most 2^29 - 2 spheres");
   }
   static constexpr int max_particles = (1 << 29) - 2;
@@ -200,7 +202,9 @@ class EventQueue {
     }
   }
   /// The slot of a bucket within reach (their number is a power of two).
-  std::size_t slot(double bucket) const { return static_cast<std::size_t>(static_cast<std::int64_t>(bucket)) & (buckets_.size() - 1); }
+  std::size_t slot(double bucket) const {
+    return static_cast<std::size_t>(static_cast<std::int64_t>(bucket)) & (buckets_.size() - 1);
+  }
   /// Makes the next bucket with entries current; false if there are none.
   bool next_bucket() {
     const double reach = static_cast<double>(buckets_.size());

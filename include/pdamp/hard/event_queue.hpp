@@ -75,7 +75,7 @@ class EventQueue {
   explicit EventQueue(int particle_count)
       : lists_(particle_count + 1),
         keyed_(particle_count + 1),
-        buckets_(std::bit_ceil(static_cast<std::size_t>(particle_count) + 1)) {
+        buckets_(std::bit_ceil(static_cast<std::size_t>(particle_count) + 1), none) {
     if (particle_count > max_particles) throw std::length_error("the event queue orders at most 2^29 - 2 spheres");
   }
   static constexpr int max_particles = (1 << 29) - 2;
@@ -94,7 +94,7 @@ class EventQueue {
     for (auto& list : lists_) list.clear();
     for (Keyed& k : keyed_) k = Keyed{k.version + 1};
     dirty_.clear();
-    for (auto& bucket : buckets_) bucket.clear();
+    std::fill(buckets_.begin(), buckets_.end(), none);
     current_.clear();
     beyond_.clear();
   }
@@ -121,29 +121,35 @@ class EventQueue {
     Keyed& keyed = keyed_[top.owner];
     list[keyed.index] = list.back();
     list.pop_back();
-    keyed = Keyed{keyed.version + 1};
+    keyed.version++;
+    keyed.place = Place::none;
     mark_dirty(static_cast<int>(top.owner));
     t_last_pop_s_ = top.t_s;
     adapt_bucket_width(top.t_s);
   }
 
  private:
-  /// An owner's earliest event as the calendar orders it; out of date once its version is
-  /// no longer the owner's.
+  static constexpr std::int32_t none = -1;
+  /// An owner's earliest event as the heaps order it; out of date once its version is no
+  /// longer the owner's.
   struct Entry {
     double t_s;
     std::uint64_t tie;  ///< tie_key of the event
     std::uint32_t owner;
     std::uint32_t version;
   };
-  /// What an owner's entry in the calendar stands for.
+  /// Where an owner's earliest event is ordered.
+  enum class Place : std::uint8_t { none, current, bucket, beyond };
+  /// What an owner's place in the calendar stands for.
   struct Keyed {
-    std::uint32_t version = 0;
-    bool entered = false;     ///< an entry with this version is in the calendar
-    std::uint8_t dirty = 0;   ///< re-key at the next top()
-    std::uint32_t index = 0;  ///< the event's position in the owner's list
+    std::uint32_t version = 0;  ///< of its entry in a heap (current or beyond)
+    Place place = Place::none;
+    std::uint8_t dirty = 0;     ///< re-key at the next top()
+    std::uint32_t index = 0;    ///< the event's position in the owner's list
     double t_s = 0.0;
     std::uint64_t tie = 0;
+    std::int32_t previous = none, next = none;  ///< neighbours in its bucket's list (place bucket)
+    std::uint32_t slot = 0;                      ///< that bucket's slot
   };
   /// Boost.Heap puts the greatest element on top; here that is the earliest event. Free
   /// of branches (`earlier`, with the tie key at hand).
@@ -176,53 +182,78 @@ class EventQueue {
       if (k > 0 && earlier(list[k], list[best])) best = k;
       ++k;
     }
-    if (list.empty()) {
-      if (keyed.entered) keyed = Keyed{keyed.version + 1};
-      return;
-    }
-    const Event& first = list[best];
-    const std::uint64_t tie = tie_key(first);
     keyed.index = static_cast<std::uint32_t>(best);
-    if (keyed.entered && keyed.t_s == first.t_s && keyed.tie == tie) return;  // the same event, perhaps moved
-    keyed = Keyed{keyed.version + 1, true, 0, static_cast<std::uint32_t>(best), first.t_s, tie};
-    enter({first.t_s, tie, static_cast<std::uint32_t>(owner), keyed.version});
+    if (!list.empty() && keyed.place != Place::none && keyed.t_s == list[best].t_s && keyed.tie == tie_key(list[best])) {
+      return;  // the same event, perhaps moved
+    }
+    leave(owner);
+    if (list.empty()) return;
+    keyed.t_s = list[best].t_s;
+    keyed.tie = tie_key(list[best]);
+    enter(owner);
   }
 
   // The calendar.
-  /// Bucket n holds the entries with floor((t − origin) / width) = n.
+  /// Bucket n holds the owners whose earliest event has floor((t − origin) / width) = n.
   double bucket_of(double t_s) const { return std::floor((t_s - origin_s_) / width_s_); }
-  void enter(const Entry& e) {
-    const double n = bucket_of(e.t_s);
+  /// The slot of a bucket within reach (their number is a power of two).
+  std::uint32_t slot_of(double bucket) const {
+    return static_cast<std::uint32_t>(static_cast<std::uint64_t>(bucket) & (buckets_.size() - 1));
+  }
+  Entry entry_of(int owner) const {
+    const Keyed& k = keyed_[owner];
+    return {k.t_s, k.tie, static_cast<std::uint32_t>(owner), k.version};
+  }
+  /// Orders owner's earliest event (keyed_[owner].t_s, .tie): into the current heap, a
+  /// bucket's list or, beyond the calendar's reach, the other heap.
+  void enter(int owner) {
+    Keyed& k = keyed_[owner];
+    const double n = bucket_of(k.t_s);
     if (n <= current_bucket_) {
-      current_.push(e);
+      k.place = Place::current;
+      current_.push(entry_of(owner));
     } else if (n < current_bucket_ + static_cast<double>(buckets_.size())) {
-      buckets_[slot(n)].push_back(e);
+      k.place = Place::bucket;
+      k.slot = slot_of(n);
+      k.previous = none;
+      k.next = buckets_[k.slot];
+      if (k.next != none) keyed_[k.next].previous = owner;
+      buckets_[k.slot] = owner;
     } else {
-      beyond_.push(e);
+      k.place = Place::beyond;
+      beyond_.push(entry_of(owner));
     }
   }
-  /// The slot of a bucket within reach (their number is a power of two).
-  std::size_t slot(double bucket) const {
-    return static_cast<std::size_t>(static_cast<std::int64_t>(bucket)) & (buckets_.size() - 1);
+  /// Takes owner out of the calendar: out of its bucket's list, or its heap entry voided.
+  void leave(int owner) {
+    Keyed& k = keyed_[owner];
+    if (k.place == Place::bucket) {
+      (k.previous == none ? buckets_[k.slot] : keyed_[k.previous].next) = k.next;
+      if (k.next != none) keyed_[k.next].previous = k.previous;
+    } else {
+      ++k.version;
+    }
+    k.place = Place::none;
   }
   /// Makes the next bucket with entries current; false if there are none.
   bool next_bucket() {
     const double reach = static_cast<double>(buckets_.size());
     for (std::size_t step = 0; step < buckets_.size(); ++step) {
       ++current_bucket_;
-      // Entries beyond the calendar's reach come within it as it moves on.
+      // Owners beyond the calendar's reach come within it as it moves on.
       for (; !beyond_.empty(); beyond_.pop()) {
         const Entry& e = beyond_.top();
         if (!is_keyed(e)) continue;
-        const double n = bucket_of(e.t_s);
-        if (n >= current_bucket_ + reach) break;
-        n <= current_bucket_ ? current_.push(e) : buckets_[slot(n)].push_back(e);
+        if (bucket_of(e.t_s) >= current_bucket_ + reach) break;
+        ++keyed_[e.owner].version;
+        enter(static_cast<int>(e.owner));
       }
-      std::vector<Entry>& bucket = buckets_[slot(current_bucket_)];
-      for (const Entry& e : bucket) {
-        if (is_keyed(e)) current_.push(e);
+      std::int32_t& head = buckets_[slot_of(current_bucket_)];
+      for (std::int32_t owner = head; owner != none; owner = keyed_[owner].next) {
+        keyed_[owner].place = Place::current;
+        current_.push(entry_of(owner));
       }
-      bucket.clear();
+      head = none;
       if (!current_.empty()) return true;
     }
     // A whole calendar without entries: the buckets are too narrow for what comes next.
@@ -248,27 +279,26 @@ class EventQueue {
     if (width > 0.5 * width_s_ && width < 2.0 * width_s_) return;
     refile(t_s, width);
   }
-  /// Starts the calendar afresh at t_s with buckets `width_s` wide, entering every valid entry again.
+  /// Starts the calendar afresh at t_s with buckets `width_s` wide, entering every owner
+  /// that has a place in it again.
   void refile(double t_s, double width_s) {
-    std::vector<Entry> entries;
-    for (; !current_.empty(); current_.pop()) entries.push_back(current_.top());
-    for (; !beyond_.empty(); beyond_.pop()) entries.push_back(beyond_.top());
-    for (std::vector<Entry>& bucket : buckets_) {
-      entries.insert(entries.end(), bucket.begin(), bucket.end());
-      bucket.clear();
+    std::vector<int> owners;
+    for (int owner = 0; owner < static_cast<int>(keyed_.size()); ++owner) {
+      if (keyed_[owner].place != Place::none) owners.push_back(owner);
     }
+    std::fill(buckets_.begin(), buckets_.end(), none);
+    current_.clear();
+    beyond_.clear();
     origin_s_ = t_s;
     width_s_ = width_s;
     current_bucket_ = 0.0;
-    for (const Entry& e : entries) {
-      if (is_keyed(e)) enter(e);
-    }
+    for (const int owner : owners) enter(owner);
   }
 
   std::vector<std::vector<Event>> lists_;  ///< each owner's events, unsorted
   std::vector<Keyed> keyed_;
-  std::vector<int> dirty_;  ///< owners whose events changed since the last top()
-  std::vector<std::vector<Entry>> buckets_;  ///< the calendar's later buckets, one slot per bucket modulo their number
+  std::vector<int> dirty_;                ///< owners whose events changed since the last top()
+  std::vector<std::int32_t> buckets_;     ///< the first owner in each later bucket's list (slot = bucket modulo their number)
   Heap current_;  ///< entries of the current bucket (and any earlier: see enter)
   Heap beyond_;   ///< entries past the calendar's last bucket
   double origin_s_ = 0.0;

@@ -132,7 +132,7 @@ Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {
   return flight(i).position_at(t_s_, gravity_m_s2_);
 }
 
-HostState HardEngine::host_now() const {
+inline HostState HardEngine::host_now() const {
   // A host that cannot move (speed bound 0: fixed walls) is where it was: its trig need
   // not be evaluated at every instant.
   const bool moved = host_now_.t_s != t_s_ && (host_.speed_bound_m_s() > 0.0 || host_now_.t_s == -never);

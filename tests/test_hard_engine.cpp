@@ -378,6 +378,23 @@ TEST_CASE("a host impulse cannot drive a cap into a sphere that touches it while
   CHECK(statistic(engine, "events_cap") >= 2);  // B on the top cap, then the floor catches A
 }
 
+TEST_CASE("touching spheres keep their predictions through host impulses that move the walls away, and nothing overlaps") {
+  // The small damper: spheres raining on the riding bed push the host down at most
+  // impulses, which moves the floor and the bed away from the spheres touching them; those
+  // predictions stand as lower bounds (touching_deferrals) instead of being redone. A
+  // missed contact would show as an overlap: checked every 20 us.
+  const Scenario s = load_scenario(test::scenario_file("small"));
+  HardEngine engine(s, placed(s));
+  const double e0 = engine.observe().energy.stored_J();
+  for (int k = 1; k <= 10000; ++k) {
+    engine.advance_to(2e-5 * k);
+    REQUIRE(engine.max_overlap_m() <= engine.overlap_tolerance_m());
+  }
+  CHECK(statistic(engine, "touching_deferrals") > 1000);
+  CHECK(statistic(engine, "touching_repredictions") > 0);  // the impulses that move walls towards them
+  CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
+}
+
 TEST_CASE("jam: a heavy sphere driven into a touching cluster in flight merges the wedged spheres instead of colliding without end") {
   // 54 touching spheres (the sites of a face-centred cubic packing nearest its centre),
   // spinning at ~3000 rad/s, and a 1000 times heavier sphere driven into them at 3 m/s,

@@ -11,11 +11,11 @@ Approach cap_contact(const Ballistic& flight, double radius_m, bool top, double 
   // Bottom: gap = z − r − z_h; top: gap = z_h + H − z − r. gap'' = ±(g_z − z_h''), and
   // |gap'''| = |z_h'''|.
   const double sign = top ? -1.0 : 1.0;
-  const double offset = top ? radius_m - height_m : radius_m;
   auto gap = [&](double t) {
     const HostState h = t == t0 ? host_at_t0 : host.at(t);
-    const double z = flight.position_at(t, g).z(), vz = flight.velocity_at(t, g).z();
-    return GapSample{sign * (z - h.z_m) - offset, sign * (vz - h.v_m_s), sign * (g.z() - host.acceleration_m_s2(t, h))};
+    const double vz = flight.velocity_at(t, g).z();
+    return GapSample{cap_gap_m(flight, radius_m, top, height_m, h, g, t), sign * (vz - h.v_m_s),
+                     sign * (g.z() - host.acceleration_m_s2(t, h))};
   };
   return earliest_contact(gap, t0, t1, std::abs(g.z()) + host.acceleration_bound_m_s2(), tolerance_m,
                           min_closing_rate_m_s, host.jerk_bound_m_s3());
@@ -34,8 +34,7 @@ Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, 
   const double curvature = relative_speed * relative_speed / contact_distance_m + relative_acceleration;
   auto gap = [&](double t) {
     const HostState h = t == t0 ? host_at_t0 : host.at(t);
-    Eigen::Vector3d dx = flight.position_at(t, g) - rider_m;
-    dx.z() -= h.z_m;
+    const Eigen::Vector3d dx = rider_offset_m(flight, rider_m, h, g, t);
     Eigen::Vector3d dv = flight.velocity_at(t, g);
     dv.z() -= h.v_m_s;
     const double distance = dx.norm();

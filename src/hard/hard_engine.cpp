@@ -60,6 +60,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       in_jam_(initial.size(), 0),
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
+      touching_bound_(initial.size()),
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
       free_cells_(grid_.cell_count() + 1, static_cast<int>(initial.size())),  // + enter_cell's empty stand-in
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
@@ -227,6 +228,7 @@ EngineStatistics HardEngine::statistics() const {
           {"close_sweeps", tiers_[2].sweeps},
           {"close_repredictions", tiers_[2].repredictions},
           {"touching_repredictions", stats_.touching_repredictions},
+          {"touching_deferrals", stats_.touching_deferrals},
           {"prediction_rebuilds", stats_.rebuilds}};
 }
 
@@ -356,15 +358,18 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   const std::uint32_t stamp = ++host_stamp_[i];
   // Down the tiers while the sphere is within each one's margin.
   for (std::size_t level = first_level; level < tiers_.size(); ++level) {
-    const HostContact margin = host_contact(i, std::min(horizon, t + tiers_[level].horizon_s), tiers_[level].margin_m);
-    if (!(margin.when.contact && margin.when.t_s <= t)) {
+    const double end = std::min(horizon, t + tiers_[level].horizon_s);
+    if (!within_host_margin(i, end, tiers_[level].margin_m)) {
       if (level == first_level && level > 0) {
         predict_host_relative(i);  // it has left the tier it was in: from the top
         return;
       }
       for (std::size_t deeper = level + 1; deeper < tiers_.size(); ++deeper) tiers_[deeper].members.erase(i);
       touching_.erase(i);
-      if (margin.when.t_s < horizon) push({margin.when.t_s, i, 0, counter_[i], stamp, EventKind::host_margin});
+      const HostContact margin = host_contact(i, end, tiers_[level].margin_m);
+      if (margin.when.t_s < horizon) {
+        push({margin.when.t_s, i, static_cast<std::int32_t>(level), counter_[i], stamp, EventKind::host_margin});
+      }
       return;
     }
     if (level + 1 < tiers_.size()) tiers_[level + 1].members.insert(i);
@@ -374,8 +379,90 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   if (exact.when.contact) {
     push({exact.when.t_s, i, exact.partner, counter_[i], stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
-    push({exact.when.t_s, i, 0, counter_[i], stamp, EventKind::host_margin});
+    push({exact.when.t_s, i, static_cast<std::int32_t>(tiers_.size() - 1), counter_[i], stamp, EventKind::host_margin});
   }
+  // The centre's host-frame height until the event: h0 + w0 s + O(s²), the relative
+  // acceleration g_z − z_h'' bounded by |g_z| + the host's acceleration bound.
+  const double until = std::min(exact.when.t_s, horizon), span = until - t;
+  const HostState host = host_now();
+  const Ballistic f = flight(i);
+  const double height = f.position_at(t, gravity_m_s2_).z() - host.z_m;
+  const double climb = (f.velocity_at(t, gravity_m_s2_).z() - host.v_m_s) * span;
+  const double curve = 0.5 * (std::abs(gravity_m_s2_.z()) + host_.acceleration_bound_m_s2()) * span * span;
+  touching_bound_[i] = {until,
+                        height + std::min(climb, 0.0) - curve,
+                        height + std::max(climb, 0.0) + curve,
+                        exact.rider_lowest_m,
+                        exact.rider_highest_m,
+                        exact.box_lowest_m,
+                        exact.box_highest_m};
+}
+
+bool HardEngine::defer_touching(int i, double velocity_change_m_s) {
+  // The new host trajectory minus the old one solves the host's homogeneous equation (the
+  // same mass, spring, damper and forcing) from zero displacement and velocity Δv: it is
+  // Δv h(s) with 0 ≤ h(s) ≤ s for s up to half a damped period, longer than any touching
+  // prediction looks ahead (a tier's horizon is at most 1/ω). So after impulses all one
+  // way, the walls and riders have moved that way by at most Σ |Δv| (t_event − t_impulse)
+  // and never back. A cap or rider moving away from the sphere can only meet it later
+  // than predicted: the prediction stands as a lower bound, if every surface that moves
+  // towards it stays out of reach. Moving down, that is the top cap (farther than the
+  // deviation from the centre's highest point) and any rider centre above the sphere's
+  // lowest (none in reach, and none at all above the box searched); moving up, the mirror.
+  TouchingBound& b = touching_bound_[i];
+  if (velocity_change_m_s == 0.0) return true;
+  const int direction = velocity_change_m_s > 0.0 ? 1 : -1;
+  if (b.direction != 0 && b.direction != direction) return false;
+  const double r = particles_.radius_m[i];
+  const double deviation = b.deviation_m + std::abs(velocity_change_m_s) * (b.event_s - t_s_);
+  const double clearance = direction < 0 ? cavity_.height_m() - r - b.highest_m : b.lowest_m - r;
+  if (!(clearance - deviation > contact_tolerance_m_)) return false;
+  if (riding_count_ > 0) {
+    const bool riders_recede = direction < 0 ? b.rider_highest_m <= b.lowest_m && rider_centres_highest_m_ <= b.box_highest_m
+                                             : b.rider_lowest_m >= b.highest_m && rider_centres_lowest_m_ >= b.box_lowest_m;
+    if (!riders_recede) return false;
+  }
+  if (b.direction == 0 && b.event_s < t_cross_s_[i]) {
+    // Its contact (if any) is no longer exact: a margin event at the same time re-predicts it.
+    push({b.event_s, i, static_cast<std::int32_t>(tiers_.size() - 1), counter_[i], ++host_stamp_[i],
+          EventKind::host_margin});
+  }
+  b.deviation_m = deviation;
+  b.direction = direction;
+  return true;
+}
+
+bool HardEngine::within_host_margin(int i, double end_s, double margin_m) const {
+  // What host_contact(i, end_s, margin_m) would answer, from the first sample each of its
+  // root finders takes: whether some gap, grown by the margin, is within the contact
+  // tolerance now. Only riders that near can be; host_contact's box holds them all.
+  const double t = t_s_;
+  if (!(end_s > t)) return false;
+  const Ballistic f = flight(i);
+  const double r = particles_.radius_m[i];
+  const HostState host = host_now();
+  const double height = cavity_.height_m();
+  for (const bool top : {false, true}) {
+    if (cap_gap_m(f, r + margin_m, top, height, host, gravity_m_s2_, t) <= contact_tolerance_m_) return true;
+  }
+  if (riding_count_ == 0) return false;
+  Eigen::Vector3d centre = f.position_at(t, gravity_m_s2_);
+  centre.z() -= host.z_m;
+  const Eigen::Vector3d reach = Eigen::Vector3d::Constant(r + max_radius_m_ + margin_m);
+  const CellCoord low = grid_.coord_of(centre - reach), high = grid_.coord_of(centre + reach);
+  const int top_layer = static_cast<int>(std::floor(height / grid_.cell_size_m()));
+  bool within = false;
+  for (int iz = std::max(0, low.iz); iz <= std::min(top_layer, high.iz); ++iz) {
+    for (int iy = low.iy; iy <= high.iy; ++iy) {
+      for (int ix = low.ix; ix <= high.ix; ++ix) {
+        rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
+          const double distance = rider_offset_m(f, particles_.position_m.col(j), host, gravity_m_s2_, t).norm();
+          within |= distance - (r + particles_.radius_m[j] + margin_m) <= contact_tolerance_m_;
+        });
+      }
+    }
+  }
+  return within;
 }
 
 HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double margin_m) const {
@@ -415,18 +502,27 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   half.z() += host_speed * span;
   const CellCoord low = grid_.coord_of(centre - half), high = grid_.coord_of(centre + half);
   const int top_layer = static_cast<int>(std::floor(height / cell));
+  double rider_lowest = never, rider_highest = -never;
   for (int iz = std::max(0, low.iz); iz <= std::min(top_layer, high.iz); ++iz) {
     for (int iy = low.iy; iy <= high.iy; ++iy) {
       for (int ix = low.ix; ix <= high.ix; ++ix) {
         rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
-          consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j] + margin_m, host_, host,
-                                 gravity_m_s2_, t, window_end, contact_tolerance_m_, closing),
+          const Eigen::Vector3d rider = particles_.position_m.col(j);
+          rider_lowest = std::min(rider_lowest, rider.z());
+          rider_highest = std::max(rider_highest, rider.z());
+          consider(rider_contact(f, rider, r + particles_.radius_m[j] + margin_m, host_, host, gravity_m_s2_, t,
+                                 window_end, contact_tolerance_m_, closing),
                    EventKind::rider, j);
         });
       }
     }
   }
   consider({window_end, false}, EventKind::host_margin, 0);
+  best.rider_lowest_m = rider_lowest;
+  best.rider_highest_m = rider_highest;
+  // The cells searched cover at least the box (a rider's centre outside them is outside it).
+  best.box_lowest_m = centre.z() - half.z();
+  best.box_highest_m = centre.z() + half.z();
   return best;
 }
 
@@ -525,7 +621,7 @@ void HardEngine::handle(const Event& e) {
       return;
     case EventKind::host_margin:
       ++stats_.host_margin;
-      predict_host_relative(e.i);
+      predict_host_relative(e.i, static_cast<std::size_t>(e.j));
       return;
     case EventKind::bed_release:
       if (e.j == 1) {
@@ -910,7 +1006,8 @@ double HardEngine::rider_energy_J(const HostState& host) const {
 void HardEngine::restart_host(HostState start) {
   ++stats_.host_impulses;
   book_host(t_s_);
-  const double velocity_change = std::abs(start.v_m_s - host_.at(t_s_).v_m_s);
+  const double old_velocity_m_s = host_.at(t_s_).v_m_s;
+  const double velocity_change = std::abs(start.v_m_s - old_velocity_m_s);
   const double mass_change = std::abs(riding_mass_kg_ - trajectory_riding_mass_kg_);
   const double old_acceleration_bound = host_.acceleration_bound_m_s2();
   host_ = HostTrajectory(host_model_, t_s_, start, riding_mass_kg_, riding_mass_kg_ * gravity_m_s2_.z());
@@ -938,7 +1035,13 @@ void HardEngine::restart_host(HostState start) {
   if (spent != tiers_.end()) {
     sweep_tier(static_cast<std::size_t>(spent - tiers_.begin()));
   } else {
-    touching_.sweep([this](int i) {
+    const double velocity_change_m_s = start.v_m_s - old_velocity_m_s;
+    touching_.sweep([&](int i) {
+      if (mass_change == 0.0 && defer_touching(i, velocity_change_m_s)) {
+        ++stats_.touching_deferrals;
+        touching_.insert(i);
+        return;
+      }
       ++stats_.touching_repredictions;
       predict_host_relative(i, tiers_.size() - 1);
     });
@@ -994,6 +1097,8 @@ void HardEngine::attach(int i) {
   particles_.velocity_m_s.col(i).setZero();
   particles_.angular_velocity_rad_s.col(i).setZero();
   rider_cells_.insert(i, grid_.cell_of(host_frame));
+  rider_centres_lowest_m_ = std::min(rider_centres_lowest_m_, host_frame.z());
+  rider_centres_highest_m_ = std::max(rider_centres_highest_m_, host_frame.z());
   riding_mass_kg_ += m;
   ++riding_count_;
   const double r = particles_.radius_m[i];
@@ -1019,6 +1124,7 @@ void HardEngine::detach(int i, const HostState& host) {
   enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
   --riding_count_;
   riding_mass_kg_ = riding_count_ > 0 ? riding_mass_kg_ - particles_.mass_kg[i] : 0.0;
+  if (riding_count_ == 0) rider_centres_lowest_m_ = never, rider_centres_highest_m_ = -never;
 }
 
 void HardEngine::release_bed() {

@@ -6,8 +6,8 @@
 #include <cstring>
 #include <string_view>
 
-// Vectors are passed between the inline helpers below, which never leave this file:
-// GCC's note that their ABI differs without AVX concerns no caller.
+// Vectors are passed by value only into the always_inline helpers below, inlined at
+// every optimisation level: GCC's note that their ABI differs without AVX concerns no call.
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace pdamp::hard {
@@ -42,14 +42,17 @@ using Mask = decltype(Lanes{} < Lanes{});
   }
 }
 
-/// One bit per lane where the mask is set: AVX2 has an instruction for it. Not
-/// always_inline: inlined into the entry points below, which `flatten` compiles for
-/// their instruction set, while the generic screen itself is not.
+/// One bit per lane where the mask is set: AVX2 has an instruction for it. The mask
+/// comes by reference: the generic screen is not always inlined into the entry points
+/// below (`flatten` may not, unoptimised), and a vector passed in registers between
+/// code compiled for different instruction sets would arrive garbled.
 struct BitsSse2 {
-  static unsigned of(Mask m) { return static_cast<unsigned>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8)); }
+  static unsigned of(const Mask& m) {
+    return static_cast<unsigned>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
+  }
 };
 struct BitsAvx2 {
-  [[gnu::target("avx2")]] static unsigned of(Mask m) {
+  [[gnu::target("avx2")]] static unsigned of(const Mask& m) {
     return static_cast<unsigned>(_mm256_movemask_pd(reinterpret_cast<__m256d>(m)));
   }
 };

@@ -164,6 +164,24 @@ Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound,
   return {std::min(t, t1), false};
 }
 
+/// A free sphere's gap to the bottom (z − r − z_h) or top (z_h + H − z − r) cap at time
+/// t, the host then at `host` (cap_contact's gap, to the bit).
+inline double cap_gap_m(const Ballistic& flight, double radius_m, bool top, double height_m, const HostState& host,
+                        const Eigen::Vector3d& g, double t_s) {
+  const double sign = top ? -1.0 : 1.0;
+  const double offset = top ? radius_m - height_m : radius_m;
+  return sign * (flight.position_at(t_s, g).z() - host.z_m) - offset;
+}
+
+/// A free sphere's centre relative to the lab position of a rider at host-frame `rider_m`
+/// at time t, the host then at `host` (rider_contact's, to the bit).
+inline Eigen::Vector3d rider_offset_m(const Ballistic& flight, const Eigen::Vector3d& rider_m, const HostState& host,
+                                      const Eigen::Vector3d& g, double t_s) {
+  Eigen::Vector3d dx = flight.position_at(t_s, g) - rider_m;
+  dx.z() -= host.z_m;
+  return dx;
+}
+
 /// The first contact of a free sphere with the bottom or top cap of a cavity of height
 /// `height_m` moving with `host` (whose state at t0 the caller has at hand), on [t0, t1].
 /// `min_closing_rate_m_s` as for earliest_contact; `within_margin` (−∞) reports the first

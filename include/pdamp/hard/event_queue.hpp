@@ -49,7 +49,7 @@ enum class EventKind : std::uint8_t {
 struct Event {
   double t_s;
   std::int32_t i;          ///< the particle (−1 for bed_release)
-  std::int32_t j;          ///< the partner particle, or the crossed face
+  std::int32_t j;          ///< the partner particle, the crossed face, or the tier a host_margin is of (its descent resumes there)
   std::uint32_t count_i;   ///< i's trajectory counter when predicted
   std::uint32_t count_j;   ///< j's counter (sphere_sphere), i's host stamp (caps, rider, host_margin) or the host epoch (bed_release)
   EventKind kind;

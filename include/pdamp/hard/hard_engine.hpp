@@ -118,7 +118,14 @@ class HardEngine final : public Engine {
     Approach when;
     EventKind kind;
     int partner;
+    /// The host-frame heights of the rider centres searched (none: lowest > highest), and
+    /// of the box they were searched in.
+    double rider_lowest_m = never, rider_highest_m = -never;
+    double box_lowest_m = never, box_highest_m = -never;
   };
+  /// Whether free sphere i, grown by `margin_m`, touches a cap or rider now: what
+  /// host_contact(i, end_s, margin_m) answers at its first step, without its root finders.
+  bool within_host_margin(int i, double end_s, double margin_m) const;
   /// The first contact of free sphere i, grown by `margin_m`, with a cap or rider, from
   /// now until `end_s` (or the end of the riders' window).
   HostContact host_contact(int i, double end_s, double margin_m) const;
@@ -219,7 +226,24 @@ class HardEngine final : public Engine {
   std::array<MarginTier, 3> tiers_;
   /// Tier `level` for `initial`'s spheres (needs fastest_host_rate_1_s_).
   MarginTier tier(std::size_t level, const Particles& initial) const;
-  ParticleSet touching_;  ///< within the inner margin: exact predictions, redone at every impulse
+  ParticleSet touching_;  ///< within the inner margin: exact predictions, redone at every impulse (or deferred)
+  /// What a touching sphere's exact host prediction assumed, so that a host impulse that
+  /// only moves the host's walls and bed away from it can leave the prediction standing
+  /// as a lower bound (defer_touching) instead of redoing it.
+  struct TouchingBound {
+    double event_s = never;  ///< its host-dependent event (or its next face crossing)
+    double lowest_m = 0.0, highest_m = 0.0;  ///< its centre's host-frame heights until then, on the trajectory predicted with
+    double rider_lowest_m = never, rider_highest_m = -never;  ///< rider centres within its reach
+    double box_lowest_m = never, box_highest_m = -never;      ///< the heights they were searched in
+    double deviation_m = 0.0;  ///< how far the host may have strayed since, all one way
+    int direction = 0;         ///< that way: +1 up, −1 down, 0 not at all
+  };
+  std::vector<TouchingBound> touching_bound_;
+  /// Host-frame heights between which the centres of all riders lie (since the bed was last empty).
+  double rider_centres_lowest_m_ = never, rider_centres_highest_m_ = -never;
+  /// After a host impulse that changed the host's velocity by `velocity_change_m_s` and not
+  /// its riding mass: whether touching sphere i's prediction still stands (see TouchingBound).
+  bool defer_touching(int i, double velocity_change_m_s);
 
   CellGrid grid_;            ///< lab frame, for free spheres; the host frame uses the same geometry
   CellMembers free_cells_;   ///< free spheres by lab cell
@@ -259,7 +283,7 @@ class HardEngine final : public Engine {
     std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
                  host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, jammed = 0, host_impulses = 0,
                  jam_merges = 0, jam_merged_spheres = 0, jam_stuck_to_host = 0,
-                 touching_repredictions = 0, rebuilds = 0;
+                 touching_repredictions = 0, touching_deferrals = 0, rebuilds = 0;
   } stats_;
 };
 

@@ -175,28 +175,31 @@ TEST_CASE("neighbour screen: every instruction set finds the meetings of the sca
   }
   REQUIRE(expected.size() >= 3);
   REQUIRE(expected.size() <= 40);
-  ScreenScratch scratch(n);
+  ScreenResult result(n);
   for (const char* isa : {"sse2", "avx2"}) {
     for (const int count : {n - 1, 1, 4, 5, 8, 9, 33}) {  // whole groups of lanes and ragged ones
       CAPTURE(isa);
       CAPTURE(count);
       std::vector<int> neighbours(n + screen_width);
       for (int k = 0; k < count; ++k) neighbours[k] = k + 1;
-      std::vector<PairQuadratic> meeting(n);
-      int met = 0;
-      if (!screen_neighbours_with(isa, sphere, g, &packed.record(0), neighbours.data(), count, scratch, meeting.data(),
-                                  met)) {
+      if (!screen_neighbours_with(isa, sphere, g, &packed.record(0), neighbours.data(), count, result)) {
         MESSAGE("this processor lacks " << isa);
         continue;
       }
+      std::vector<int> met;
+      std::vector<PairQuadratic> pairs;
+      result.for_each_met(count, [&](int k, const PairQuadratic& pair) {
+        met.push_back(neighbours[k]);
+        pairs.push_back(pair);
+      });
       std::size_t expected_met = 0;
       while (expected_met < expected.size() && expected[expected_met] <= count) ++expected_met;
-      REQUIRE(met == static_cast<int>(expected_met));
-      for (int k = 0; k < met; ++k) {
-        CHECK(neighbours[k] == expected[k]);
-        CHECK(std::bit_cast<std::uint64_t>(meeting[k].b) == std::bit_cast<std::uint64_t>(expected_pairs[k].b));
-        CHECK(std::bit_cast<std::uint64_t>(meeting[k].c) == std::bit_cast<std::uint64_t>(expected_pairs[k].c));
-        CHECK(std::bit_cast<std::uint64_t>(meeting[k].discriminant) ==
+      REQUIRE(met.size() == expected_met);
+      for (std::size_t k = 0; k < met.size(); ++k) {
+        CHECK(met[k] == expected[k]);
+        CHECK(std::bit_cast<std::uint64_t>(pairs[k].b) == std::bit_cast<std::uint64_t>(expected_pairs[k].b));
+        CHECK(std::bit_cast<std::uint64_t>(pairs[k].c) == std::bit_cast<std::uint64_t>(expected_pairs[k].c));
+        CHECK(std::bit_cast<std::uint64_t>(pairs[k].discriminant) ==
               std::bit_cast<std::uint64_t>(expected_pairs[k].discriminant));
       }
     }

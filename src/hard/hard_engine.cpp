@@ -66,8 +66,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
       queue_(static_cast<int>(initial.size())),
       neighbours_(initial.size() + std::max(CellMembers::copy_width, screen_width)),
-      meeting_pairs_(initial.size()),
-      screen_scratch_(static_cast<int>(initial.size())),
+      screen_result_(static_cast<int>(initial.size())),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
@@ -321,12 +320,11 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   const int candidate_count = new_cells.size() == std::tuple_size_v<Around>
                                   ? free_cells_.gather<std::tuple_size_v<Around>>(new_cells.data(), candidates)
                                   : free_cells_.gather<std::tuple_size_v<Layer>>(new_cells.data(), candidates);
-  const int meeting_count = screen_neighbours({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count,
-                                              screen_scratch_, meeting_pairs_.data());
-  for (int k = 0; k < meeting_count; ++k) {
+  screen_neighbours({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count, screen_result_);
+  screen_result_.for_each_met(candidate_count, [&](int k, const PairQuadratic& pair) {
     const int j = candidates[k];
-    push({t + meeting_pairs_[k].time_s(), i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
-  }
+    push({t + pair.time_s(), i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
+  });
 
   // The side wall, if any point of the cell is within reach of it.
   const double far_x = std::max(std::abs(grid_.x_lower_m(c.ix)), std::abs(grid_.x_lower_m(c.ix + 1)));

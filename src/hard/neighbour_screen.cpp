@@ -2,7 +2,6 @@
 
 #include <immintrin.h>
 
-#include <bit>
 #include <cstring>
 #include <string_view>
 
@@ -11,6 +10,15 @@
 #pragma GCC diagnostic ignored "-Wpsabi"
 
 namespace pdamp::hard {
+
+/// The screen's way into a ScreenResult's arrays.
+struct ScreenAccess {
+  static double* b(ScreenResult& r) { return r.b_.data(); }
+  static double* c(ScreenResult& r) { return r.c_.data(); }
+  static double* discriminant(ScreenResult& r) { return r.discriminant_.data(); }
+  static std::uint64_t* meets(ScreenResult& r) { return r.meets_.data(); }
+};
+
 namespace {
 
 constexpr int width = screen_width;
@@ -57,13 +65,12 @@ struct BitsAvx2 {
   }
 };
 
-/// The screen, written once; each instruction set below compiles its own copy. A first
-/// pass tests every neighbour and keeps its quadratic and whether it meets (one bit in
-/// `scratch.meets`); a second moves those met to the front. Compacting in the first pass
-/// would chain every group's stores to the count of the group before.
+/// The screen, written once; each instruction set below compiles its own copy. It keeps
+/// every neighbour's quadratic and one bit for whether they meet: picking out the few
+/// met here would chain every group's stores to the count of the group before.
 template <class Bits>
-int screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records, int* neighbours,
-           int count, ScreenScratch& scratch, PairQuadratic* meeting) {
+void screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records, int* neighbours,
+            int count, ScreenResult& result) {
   for (int k = 0; k < width; ++k) neighbours[count + k] = sphere.index;  // pads: never meets itself
   const int padded = (count + width - 1) / width * width;
   const Lanes t = splat(sphere.t_s), r = splat(sphere.radius_m);
@@ -71,10 +78,10 @@ int screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightR
   const Lanes vx = splat(sphere.velocity_m_s.x()), vy = splat(sphere.velocity_m_s.y()),
               vz = splat(sphere.velocity_m_s.z());
   const Lanes gx = splat(g.x()), gy = splat(g.y()), gz = splat(g.z());
-  double* __restrict const b_out = scratch.b.data();
-  double* __restrict const c_out = scratch.c.data();
-  double* __restrict const discriminant_out = scratch.discriminant.data();
-  std::uint64_t* __restrict const meets_bits = scratch.meets.data();
+  double* __restrict const b_out = ScreenAccess::b(result);
+  double* __restrict const c_out = ScreenAccess::c(result);
+  double* __restrict const discriminant_out = ScreenAccess::discriminant(result);
+  std::uint64_t* __restrict const meets_bits = ScreenAccess::meets(result);
   for (int first = 0; first < padded; first += 64) meets_bits[first / 64] = 0;
   for (int first = 0; first < padded; first += width) {
     const FlightRecord* record[width];
@@ -97,31 +104,20 @@ int screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightR
     store(discriminant_out + first, discriminant);
     meets_bits[first / 64] |= static_cast<std::uint64_t>(Bits::of(meets)) << (first % 64);
   }
-  int met = 0;
-  for (int word = 0; word * 64 < padded; ++word) {
-    for (std::uint64_t bits = meets_bits[word]; bits != 0; bits &= bits - 1) {
-      const int k = 64 * word + std::countr_zero(bits);
-      neighbours[met] = neighbours[k];
-      meeting[met] = {b_out[k], c_out[k], discriminant_out[k]};
-      ++met;
-    }
-  }
-  return met;
 }
 
-[[gnu::flatten]] int screen_sse2(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
-                                 int* neighbours, int count, ScreenScratch& scratch, PairQuadratic* meeting) {
-  return screen<BitsSse2>(sphere, g, records, neighbours, count, scratch, meeting);
+[[gnu::flatten]] void screen_sse2(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
+                                  int* neighbours, int count, ScreenResult& result) {
+  screen<BitsSse2>(sphere, g, records, neighbours, count, result);
 }
 
-[[gnu::target("avx2"), gnu::flatten]] int screen_avx2(const ScreenedSphere& sphere, const Eigen::Vector3d& g,
-                                                      const FlightRecord* records, int* neighbours, int count,
-                                                      ScreenScratch& scratch, PairQuadratic* meeting) {
-  return screen<BitsAvx2>(sphere, g, records, neighbours, count, scratch, meeting);
+[[gnu::target("avx2"), gnu::flatten]] void screen_avx2(const ScreenedSphere& sphere, const Eigen::Vector3d& g,
+                                                       const FlightRecord* records, int* neighbours, int count,
+                                                       ScreenResult& result) {
+  screen<BitsAvx2>(sphere, g, records, neighbours, count, result);
 }
 
-using Screen = int (*)(const ScreenedSphere&, const Eigen::Vector3d&, const FlightRecord*, int*, int, ScreenScratch&,
-                       PairQuadratic*);
+using Screen = void (*)(const ScreenedSphere&, const Eigen::Vector3d&, const FlightRecord*, int*, int, ScreenResult&);
 
 struct InstructionSet {
   const char* name;
@@ -149,23 +145,22 @@ const InstructionSet& best_instruction_set() {
 
 }  // namespace
 
-int screen_neighbours(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
-                      int* neighbours, int count, ScreenScratch& scratch, PairQuadratic* meeting) {
-  return best_instruction_set().screen(sphere, g, records, neighbours, count, scratch, meeting);
+void screen_neighbours(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
+                       int* neighbours, int count, ScreenResult& result) {
+  best_instruction_set().screen(sphere, g, records, neighbours, count, result);
 }
 
 const char* screen_instruction_set() { return best_instruction_set().name; }
 
 bool screen_neighbours_with(const char* instruction_set, const ScreenedSphere& sphere, const Eigen::Vector3d& g,
-                            const FlightRecord* records, int* neighbours, int count, ScreenScratch& scratch,
-                            PairQuadratic* meeting, int& meeting_count) {
+                            const FlightRecord* records, int* neighbours, int count, ScreenResult& result) {
   for (const InstructionSet* set = instruction_sets();; ++set) {
     if (std::string_view(set->name) != instruction_set) {
       if (std::string_view(set->name) == "sse2") return false;  // the last: no such set
       continue;
     }
     if (!set->available) return false;
-    meeting_count = set->screen(sphere, g, records, neighbours, count, scratch, meeting);
+    set->screen(sphere, g, records, neighbours, count, result);
     return true;
   }
 }

@@ -250,8 +250,7 @@ class HardEngine final : public Engine {
   CellMembers rider_cells_;  ///< riding spheres by host-frame cell
   EventQueue queue_;
   std::vector<int> neighbours_;  ///< predict's scratch: the free spheres around the one predicted
-  std::vector<PairQuadratic> meeting_pairs_;  ///< predict's scratch: the contact tests of those it meets
-  ScreenScratch screen_scratch_;
+  ScreenResult screen_result_;  ///< predict's scratch: the contact tests of those neighbours
   double contact_tolerance_m_;
   double max_radius_m_;
   double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart

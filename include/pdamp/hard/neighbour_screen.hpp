@@ -10,6 +10,7 @@
 /// screen waits on its loads more than on its arithmetic.)
 
 #include <Eigen/Core>
+#include <bit>
 #include <cstdint>
 #include <vector>
 
@@ -28,23 +29,39 @@ struct ScreenedSphere {
 /// Lanes per group.
 inline constexpr int screen_width = 4;
 
-/// screen_neighbours' working memory, for up to `capacity` neighbours.
-struct ScreenScratch {
-  explicit ScreenScratch(int capacity)
-      : b(capacity + screen_width),
-        c(capacity + screen_width),
-        discriminant(capacity + screen_width),
-        meets((capacity + screen_width) / 64 + 1) {}
-  std::vector<double> b, c, discriminant;
-  std::vector<std::uint64_t> meets;
+/// What screen_neighbours finds, for up to `capacity` neighbours: each one's quadratic,
+/// and one bit per neighbour that the sphere meets.
+class ScreenResult {
+ public:
+  explicit ScreenResult(int capacity)
+      : b_(capacity + screen_width),
+        c_(capacity + screen_width),
+        discriminant_(capacity + screen_width),
+        meets_((capacity + screen_width) / 64 + 1) {}
+
+  /// Calls visit(k, quadratic) for each neighbour k < count (the count screened) that the
+  /// sphere meets, in order: one loop over the meetings (about one neighbour in ten),
+  /// which the engine times and enters as they come.
+  template <class Visit>
+  void for_each_met(int count, Visit visit) const {
+    for (int word = 0; word * 64 < count; ++word) {
+      for (std::uint64_t bits = meets_[word]; bits != 0; bits &= bits - 1) {
+        const int k = 64 * word + std::countr_zero(bits);
+        visit(k, PairQuadratic{b_[k], c_[k], discriminant_[k]});
+      }
+    }
+  }
+
+ private:
+  friend struct ScreenAccess;
+  std::vector<double> b_, c_, discriminant_;
+  std::vector<std::uint64_t> meets_;
 };
 
 /// Screens `neighbours[0 … count)` (the array must have room for screen_width more)
-/// against `sphere`, under gravity `g`: moves those it meets to the front of
-/// `neighbours`, in their order, with their quadratics in `meeting`, and returns how
-/// many it meets.
-int screen_neighbours(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
-                      int* neighbours, int count, ScreenScratch& scratch, PairQuadratic* meeting);
+/// against `sphere`, under gravity `g`, into `result`.
+void screen_neighbours(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
+                       int* neighbours, int count, ScreenResult& result);
 
 /// The instruction set screen_neighbours uses on this processor: "avx2" or "sse2".
 const char* screen_instruction_set();
@@ -52,7 +69,6 @@ const char* screen_instruction_set();
 /// screen_neighbours on a given instruction set (for tests: each must give the same
 /// bits); false if this processor lacks it.
 bool screen_neighbours_with(const char* instruction_set, const ScreenedSphere& sphere, const Eigen::Vector3d& g,
-                            const FlightRecord* records, int* neighbours, int count, ScreenScratch& scratch,
-                            PairQuadratic* meeting, int& meeting_count);
+                            const FlightRecord* records, int* neighbours, int count, ScreenResult& result);
 
 }  // namespace pdamp::hard

@@ -980,7 +980,7 @@ void HardEngine::cross_face(int i, Face face) {
 void HardEngine::enter_cell(int i, const CellCoord& c) {
   cell_[i] = c;
   grid_.block(c, grid_.cell_count(), around_[i]);  // the empty stand-in beyond the sides
-  free_cells_.insert(i, grid_.index(c));
+  free_cells_.insert(i, around_[i][13]);           // the middle of the block is c itself
 }
 
 // ---------------------------------------------------------------------------------------------

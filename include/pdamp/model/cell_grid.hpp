@@ -69,7 +69,8 @@ inline CellCoord CellGrid::coord_of(const Eigen::Vector3d& p) const {
 }
 
 inline int CellGrid::index(const CellCoord& c) const {
-  const int iz = ((c.iz % n_z_) + n_z_) % n_z_;
+  const int remainder = c.iz % n_z_;  // one integer division: they are slow
+  const int iz = remainder < 0 ? remainder + n_z_ : remainder;
   return (iz * n_xy_ + c.iy) * n_xy_ + c.ix;
 }
 

@@ -61,6 +61,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
       touching_bound_(initial.size()),
+      touching_slack_m_(0.01 * initial.radius_m.minCoeff()),
       grid_(scenario.cavity.radius_m(), scenario.cavity.height_m, 2.0 * initial.max_radius_m() * cell_margin),
       free_cells_(grid_.cell_count() + 1, static_cast<int>(initial.size())),  // + enter_cell's empty stand-in
       rider_cells_(grid_.cell_count(), static_cast<int>(initial.size())),
@@ -379,21 +380,28 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   } else if (exact.when.t_s < horizon) {
     push({exact.when.t_s, i, static_cast<std::int32_t>(tiers_.size() - 1), counter_[i], stamp, EventKind::host_margin});
   }
-  // The centre's host-frame height until the event: h0 + w0 s + O(s²), the relative
-  // acceleration g_z − z_h'' bounded by |g_z| + the host's acceleration bound.
+  // Until the event, the sphere's host-frame motion is x0 + w0 s + O(s²), its
+  // acceleration relative to the host bounded by |g| + the host's acceleration bound: its
+  // centre's heights, and how much its gap to a rider can close, follow.
   const double until = std::min(exact.when.t_s, horizon), span = until - t;
   const HostState host = host_now();
   const Ballistic f = flight(i);
-  const double height = f.position_at(t, gravity_m_s2_).z() - host.z_m;
-  const double climb = (f.velocity_at(t, gravity_m_s2_).z() - host.v_m_s) * span;
-  const double curve = 0.5 * (std::abs(gravity_m_s2_.z()) + host_.acceleration_bound_m_s2()) * span * span;
-  touching_bound_[i] = {until,
-                        height + std::min(climb, 0.0) - curve,
-                        height + std::max(climb, 0.0) + curve,
-                        exact.rider_lowest_m,
-                        exact.rider_highest_m,
-                        exact.box_lowest_m,
-                        exact.box_highest_m};
+  Eigen::Vector3d position = f.position_at(t, gravity_m_s2_), velocity = f.velocity_at(t, gravity_m_s2_);
+  position.z() -= host.z_m;
+  velocity.z() -= host.v_m_s;
+  const double curve = 0.5 * (gravity_m_s2_.norm() + host_.acceleration_bound_m_s2()) * span * span;
+  TouchingBound bound{until, position.z() + std::min(velocity.z() * span, 0.0) - curve,
+                      position.z() + std::max(velocity.z() * span, 0.0) + curve};
+  const double closing = velocity.norm() * span + curve;
+  if (riding_count_ > 0) {
+    for_each_rider_in(exact.box_centre_m, exact.box_half_m, [&](int j) {
+      const Eigen::Vector3d rider = particles_.position_m.col(j);
+      const double gap = (position - rider).norm() - (particles_.radius_m[i] + particles_.radius_m[j]) - closing;
+      if (rider.z() > bound.lowest_m) bound.gap_above_m = std::min(bound.gap_above_m, gap);
+      if (rider.z() < bound.highest_m) bound.gap_below_m = std::min(bound.gap_below_m, gap);
+    });
+  }
+  touching_bound_[i] = bound;
 }
 
 bool HardEngine::defer_touching(int i, double velocity_change_m_s) {
@@ -403,10 +411,12 @@ bool HardEngine::defer_touching(int i, double velocity_change_m_s) {
   // prediction looks ahead (a tier's horizon is at most 1/ω). So after impulses all one
   // way, the walls and riders have moved that way by at most Σ |Δv| (t_event − t_impulse)
   // and never back. A cap or rider moving away from the sphere can only meet it later
-  // than predicted: the prediction stands as a lower bound, if every surface that moves
-  // towards it stays out of reach. Moving down, that is the top cap (farther than the
-  // deviation from the centre's highest point) and any rider centre above the sphere's
-  // lowest (none in reach, and none at all above the box searched); moving up, the mirror.
+  // than predicted; one moving towards it closes its gap by at most the deviation. So the
+  // prediction stands as a lower bound if every surface that moves towards the sphere is
+  // farther than that. Moving down, those are the top cap and the riders whose centres
+  // are above the sphere's lowest point (a rider's distance changes by at most the
+  // deviation, and grows if its centre stays below the sphere's); moving up, the mirror.
+  // Riders outside the box searched are farther than the slack it had.
   TouchingBound& b = touching_bound_[i];
   if (velocity_change_m_s == 0.0) return true;
   const int direction = velocity_change_m_s > 0.0 ? 1 : -1;
@@ -414,12 +424,10 @@ bool HardEngine::defer_touching(int i, double velocity_change_m_s) {
   const double r = particles_.radius_m[i];
   const double deviation = b.deviation_m + std::abs(velocity_change_m_s) * (b.event_s - t_s_);
   const double clearance = direction < 0 ? cavity_.height_m() - r - b.highest_m : b.lowest_m - r;
-  if (!(clearance - deviation > contact_tolerance_m_)) return false;
-  if (riding_count_ > 0) {
-    const bool riders_recede = direction < 0 ? b.rider_highest_m <= b.lowest_m && rider_centres_highest_m_ <= b.box_highest_m
-                                             : b.rider_lowest_m >= b.highest_m && rider_centres_lowest_m_ >= b.box_lowest_m;
-    if (!riders_recede) return false;
-  }
+  // (Riders attached since the prediction changed the riding mass, which re-predicts.)
+  const double riders =
+      riding_count_ > 0 ? std::min(direction < 0 ? b.gap_above_m : b.gap_below_m, touching_slack_m_) : never;
+  if (!(std::min(clearance, riders) - deviation > contact_tolerance_m_)) return false;
   if (b.direction == 0 && b.event_s < t_cross_s_[i]) {
     // Its contact (if any) is no longer exact: a margin event at the same time re-predicts it.
     push({b.event_s, i, static_cast<std::int32_t>(tiers_.size() - 1), counter_[i], ++host_stamp_[i],
@@ -428,6 +436,18 @@ bool HardEngine::defer_touching(int i, double velocity_change_m_s) {
   b.deviation_m = deviation;
   b.direction = direction;
   return true;
+}
+
+template <class Visit>
+void HardEngine::for_each_rider_in(const Eigen::Vector3d& centre_m, const Eigen::Vector3d& half_m, Visit visit) const {
+  // The cells that cover the box (a rider's centre outside them is outside it).
+  const CellCoord low = grid_.coord_of(centre_m - half_m), high = grid_.coord_of(centre_m + half_m);
+  const int top_layer = static_cast<int>(std::floor(cavity_.height_m() / grid_.cell_size_m()));
+  for (int iz = std::max(0, low.iz); iz <= std::min(top_layer, high.iz); ++iz) {
+    for (int iy = low.iy; iy <= high.iy; ++iy) {
+      for (int ix = low.ix; ix <= high.ix; ++ix) rider_cells_.for_each_in(grid_.index({ix, iy, iz}), visit);
+    }
+  }
 }
 
 bool HardEngine::within_host_margin(int i, double end_s, double margin_m) const {
@@ -446,20 +466,11 @@ bool HardEngine::within_host_margin(int i, double end_s, double margin_m) const 
   if (riding_count_ == 0) return false;
   Eigen::Vector3d centre = f.position_at(t, gravity_m_s2_);
   centre.z() -= host.z_m;
-  const Eigen::Vector3d reach = Eigen::Vector3d::Constant(r + max_radius_m_ + margin_m);
-  const CellCoord low = grid_.coord_of(centre - reach), high = grid_.coord_of(centre + reach);
-  const int top_layer = static_cast<int>(std::floor(height / grid_.cell_size_m()));
   bool within = false;
-  for (int iz = std::max(0, low.iz); iz <= std::min(top_layer, high.iz); ++iz) {
-    for (int iy = low.iy; iy <= high.iy; ++iy) {
-      for (int ix = low.ix; ix <= high.ix; ++ix) {
-        rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
-          const double distance = rider_offset_m(f, particles_.position_m.col(j), host, gravity_m_s2_, t).norm();
-          within |= distance - (r + particles_.radius_m[j] + margin_m) <= contact_tolerance_m_;
-        });
-      }
-    }
-  }
+  for_each_rider_in(centre, Eigen::Vector3d::Constant(r + max_radius_m_ + margin_m), [&](int j) {
+    const double distance = rider_offset_m(f, particles_.position_m.col(j), host, gravity_m_s2_, t).norm();
+    within |= distance - (r + particles_.radius_m[j] + margin_m) <= contact_tolerance_m_;
+  });
   return within;
 }
 
@@ -497,30 +508,15 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   centre.z() -= host.z_m;
   Eigen::Vector3d half = f.velocity_at(t, gravity_m_s2_).cwiseAbs() * span + 0.5 * gravity_m_s2_.cwiseAbs() * span * span;
   half.array() += r + max_radius_m_ + margin_m;
-  half.z() += host_speed * span;
-  const CellCoord low = grid_.coord_of(centre - half), high = grid_.coord_of(centre + half);
-  const int top_layer = static_cast<int>(std::floor(height / cell));
-  double rider_lowest = never, rider_highest = -never;
-  for (int iz = std::max(0, low.iz); iz <= std::min(top_layer, high.iz); ++iz) {
-    for (int iy = low.iy; iy <= high.iy; ++iy) {
-      for (int ix = low.ix; ix <= high.ix; ++ix) {
-        rider_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
-          const Eigen::Vector3d rider = particles_.position_m.col(j);
-          rider_lowest = std::min(rider_lowest, rider.z());
-          rider_highest = std::max(rider_highest, rider.z());
-          consider(rider_contact(f, rider, r + particles_.radius_m[j] + margin_m, host_, host, gravity_m_s2_, t,
-                                 window_end, contact_tolerance_m_, closing),
-                   EventKind::rider, j);
-        });
-      }
-    }
-  }
+  half.z() += host_speed * span + (margin_m > 0.0 ? 0.0 : touching_slack_m_);
+  for_each_rider_in(centre, half, [&](int j) {
+    consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j] + margin_m, host_, host,
+                           gravity_m_s2_, t, window_end, contact_tolerance_m_, closing),
+             EventKind::rider, j);
+  });
   consider({window_end, false}, EventKind::host_margin, 0);
-  best.rider_lowest_m = rider_lowest;
-  best.rider_highest_m = rider_highest;
-  // The cells searched cover at least the box (a rider's centre outside them is outside it).
-  best.box_lowest_m = centre.z() - half.z();
-  best.box_highest_m = centre.z() + half.z();
+  best.box_centre_m = centre;
+  best.box_half_m = half;
   return best;
 }
 
@@ -1095,8 +1091,6 @@ void HardEngine::attach(int i) {
   particles_.velocity_m_s.col(i).setZero();
   particles_.angular_velocity_rad_s.col(i).setZero();
   rider_cells_.insert(i, grid_.cell_of(host_frame));
-  rider_centres_lowest_m_ = std::min(rider_centres_lowest_m_, host_frame.z());
-  rider_centres_highest_m_ = std::max(rider_centres_highest_m_, host_frame.z());
   riding_mass_kg_ += m;
   ++riding_count_;
   const double r = particles_.radius_m[i];
@@ -1122,7 +1116,6 @@ void HardEngine::detach(int i, const HostState& host) {
   enter_cell(i, grid_.coord_of(particles_.position_m.col(i)));
   --riding_count_;
   riding_mass_kg_ = riding_count_ > 0 ? riding_mass_kg_ - particles_.mass_kg[i] : 0.0;
-  if (riding_count_ == 0) rider_centres_lowest_m_ = never, rider_centres_highest_m_ = -never;
 }
 
 void HardEngine::release_bed() {

@@ -118,11 +118,13 @@ class HardEngine final : public Engine {
     Approach when;
     EventKind kind;
     int partner;
-    /// The host-frame heights of the rider centres searched (none: lowest > highest), and
-    /// of the box they were searched in.
-    double rider_lowest_m = never, rider_highest_m = -never;
-    double box_lowest_m = never, box_highest_m = -never;
+    /// The box the riders were searched in (host frame; with margin 0 it reaches
+    /// touching_slack_m_ farther in z than the path needs).
+    Eigen::Vector3d box_centre_m = Eigen::Vector3d::Zero(), box_half_m = Eigen::Vector3d::Zero();
   };
+  /// Calls visit(j) for each rider j in the cells that cover the host-frame box centre ± half.
+  template <class Visit>
+  void for_each_rider_in(const Eigen::Vector3d& centre_m, const Eigen::Vector3d& half_m, Visit visit) const;
   /// Whether free sphere i, grown by `margin_m`, touches a cap or rider now: what
   /// host_contact(i, end_s, margin_m) answers at its first step, without its root finders.
   bool within_host_margin(int i, double end_s, double margin_m) const;
@@ -233,14 +235,16 @@ class HardEngine final : public Engine {
   struct TouchingBound {
     double event_s = never;  ///< its host-dependent event (or its next face crossing)
     double lowest_m = 0.0, highest_m = 0.0;  ///< its centre's host-frame heights until then, on the trajectory predicted with
-    double rider_lowest_m = never, rider_highest_m = -never;  ///< rider centres within its reach
-    double box_lowest_m = never, box_highest_m = -never;      ///< the heights they were searched in
+    /// Lower bounds until then on its gaps to the riders searched whose centres lie above
+    /// its lowest height, and to those below its highest.
+    double gap_above_m = never, gap_below_m = never;
     double deviation_m = 0.0;  ///< how far the host may have strayed since, all one way
     int direction = 0;         ///< that way: +1 up, −1 down, 0 not at all
   };
   std::vector<TouchingBound> touching_bound_;
-  /// Host-frame heights between which the centres of all riders lie (since the bed was last empty).
-  double rider_centres_lowest_m_ = never, rider_centres_highest_m_ = -never;
+  /// How much farther in z than its path needs a touching sphere's riders are searched:
+  /// riders beyond the box stay out of reach of a host that strays less than this.
+  double touching_slack_m_;
   /// After a host impulse that changed the host's velocity by `velocity_change_m_s` and not
   /// its riding mass: whether touching sphere i's prediction still stands (see TouchingBound).
   bool defer_touching(int i, double velocity_change_m_s);

@@ -1,5 +1,6 @@
 #include <doctest/doctest.h>
 
+#include <array>
 #include <random>
 #include <set>
 
@@ -37,6 +38,28 @@ TEST_CASE("cells are at least as large as asked and tile the cross-section") {
   CHECK(std::set<int>(cells.begin(), cells.begin() + n).size() == 27);
   // At a corner of the cross-section only 2 x 2 x 3 cells exist.
   CHECK(grid.neighbours(grid.coord_of({-0.0049, -0.0049, 0.01}), cells) == 12);
+}
+
+TEST_CASE("a cell's block is its 27 neighbours, wrapped in z, with a stand-in beyond the sides") {
+  const CellGrid grid(0.005, 0.012, 0.0011);  // 9 x 9 cells across, 13 layers
+  constexpr int outside = -7;
+  for (int iz = -30; iz <= 30; ++iz) {
+    for (int iy = 0; iy < grid.ny(); ++iy) {
+      for (int ix = 0; ix < grid.nx(); ++ix) {
+        std::array<int, 27> block{};
+        grid.block({ix, iy, iz}, outside, block);
+        int k = 0;
+        for (int dz = -1; dz <= 1; ++dz) {
+          for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx, ++k) {
+              const bool inside = ix + dx >= 0 && ix + dx < grid.nx() && iy + dy >= 0 && iy + dy < grid.ny();
+              CHECK(block[k] == (inside ? grid.index({ix + dx, iy + dy, iz + dz}) : outside));
+            }
+          }
+        }
+      }
+    }
+  }
 }
 
 TEST_CASE("the cell list finds every pair within one cell size, wherever the host is") {

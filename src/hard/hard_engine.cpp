@@ -50,7 +50,6 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       particles_(initial),
       counter_(initial.size(), 0),
       cell_(initial.size()),
-      around_(initial.size()),
       t_cross_s_(initial.size(), never),
       host_stamp_(initial.size(), 0),
       last_collision_s_(initial.size(), -never),
@@ -963,20 +962,21 @@ void HardEngine::cross_face(int i, Face face) {
   enter_cell(i, c);
   // Only the layer of cells beyond the face is new around i: its contacts with the
   // spheres in the others were predicted with the same trajectory.
+  Around around;
+  grid_.block(c, grid_.cell_count(), around);  // the empty stand-in beyond the sides
   constexpr std::array<int, 3> stride{1, 3, 9};  // in Around, of x, y and z
   const int axis = face / 2, beyond = (face % 2 == 1 ? 2 : 0) * stride[axis];
   const int u_stride = stride[(axis + 1) % 3], w_stride = stride[(axis + 2) % 3];
   Layer entered{};
   for (int u = 0; u < 3; ++u) {
-    for (int w = 0; w < 3; ++w) entered[3 * u + w] = around_[i][beyond + u * u_stride + w * w_stride];
+    for (int w = 0; w < 3; ++w) entered[3 * u + w] = around[beyond + u * u_stride + w * w_stride];
   }
   predict(i, entered);
 }
 
 void HardEngine::enter_cell(int i, const CellCoord& c) {
   cell_[i] = c;
-  grid_.block(c, grid_.cell_count(), around_[i]);  // the empty stand-in beyond the sides
-  free_cells_.insert(i, around_[i][13]);           // the middle of the block is c itself
+  free_cells_.insert(i, grid_.index(c));
 }
 
 // ---------------------------------------------------------------------------------------------

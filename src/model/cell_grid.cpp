@@ -13,6 +13,12 @@ CellGrid::CellGrid(double cavity_radius_m, double cavity_height_m, double min_ce
   // top and bottom layers out of each other's neighbourhood; at least 3 keeps the 27
   // neighbours distinct.
   n_z_ = std::max(3, static_cast<int>(std::ceil(cavity_height_m / cell_m_)) + 2);
+  int k = 0;
+  for (int dz = -1; dz <= 1; ++dz) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) block_offsets_[k++] = (dz * n_xy_ + dy) * n_xy_ + dx;
+    }
+  }
 }
 
 void CellList::build(const CellGrid& grid, const Eigen::Ref<const Eigen::Matrix3Xd>& positions) {

@@ -101,7 +101,11 @@ class HardEngine final : public Engine {
   // Prediction.
   void push(const Event& event) { queue_.push(event); }
   /// Predicts every event of free sphere i anew (its trajectory changed).
-  void predict(int i) { predict(i, around_[i]); }
+  void predict(int i) {
+    Around around;
+    grid_.block(cell_[i], grid_.cell_count(), around);  // the empty stand-in beyond the sides
+    predict(i, around);
+  }
   /// Predicts sphere i's events anew, but its contacts only with the spheres in
   /// `new_cells` (it has just crossed into a cell whose other neighbours it already had):
   /// an Around or a Layer.
@@ -185,14 +189,13 @@ class HardEngine final : public Engine {
   PackedParticles particles_;
   std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
   std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
-  /// The 3 × 3 × 3 cells around each free sphere's cell (CellGrid::block), kept because
-  /// every prediction needs them. Beyond the grid's sides an empty cell stands in, so that
-  /// gathering the neighbours is a loop of fixed length and the layer entered at a face
-  /// crossing is at fixed places.
+  /// The 3 × 3 × 3 cells around a free sphere's cell (CellGrid::block), worked out at
+  /// each prediction. Beyond the grid's sides an empty cell stands in, so that gathering
+  /// the neighbours is a loop of fixed length and the layer entered at a face crossing is
+  /// at fixed places.
   using Around = std::array<int, 27>;
   /// The 3 × 3 cells of Around beyond one face: those a face crossing brings in.
   using Layer = std::array<int, 9>;
-  std::vector<Around> around_;
   std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
   std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
   std::vector<double> last_collision_s_;

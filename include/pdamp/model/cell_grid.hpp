@@ -56,6 +56,7 @@ class CellGrid {
   double cell_m_;
   int n_xy_;
   int n_z_;
+  std::array<int, 27> block_offsets_;  ///< of the 27 cells of a block from its middle, where none wraps or is outside
 };
 
 // Inline: these run for every sphere at every neighbour-list build.
@@ -75,8 +76,17 @@ inline int CellGrid::index(const CellCoord& c) const {
 }
 
 inline void CellGrid::block(const CellCoord& c, int outside, std::array<int, 27>& out) const {
+  // Most cells are inside in x and y, and their layers do not wrap: fixed offsets.
+  const int remainder = c.iz % n_z_;
+  const int iz = remainder < 0 ? remainder + n_z_ : remainder;
+  const auto within = [](int k, int n) { return static_cast<unsigned>(k - 1) < static_cast<unsigned>(n - 2); };
+  if (within(c.ix, n_xy_) && within(c.iy, n_xy_) && within(iz, n_z_)) {
+    const int middle = (iz * n_xy_ + c.iy) * n_xy_ + c.ix;
+    for (int k = 0; k < 27; ++k) out[k] = middle + block_offsets_[k];
+    return;
+  }
   // The three layers wrapped once, not each cell: integer divisions are slow.
-  const int layer = index({0, 0, c.iz});
+  const int layer = iz * n_xy_ * n_xy_;
   const int layer_size = n_xy_ * n_xy_, period = n_z_ * layer_size;
   const std::array<int, 3> layers{layer == 0 ? period - layer_size : layer - layer_size, layer,
                                   layer + layer_size == period ? 0 : layer + layer_size};

@@ -529,6 +529,9 @@ void HardEngine::predict_bed_release() {
 }
 
 void HardEngine::leave_host_sets(int i) {
+  // The sets nest (touching within the close tier, within the imminent, within the near),
+  // and most spheres are in none: one look at the outermost settles it.
+  if (!tiers_[0].members.contains(i)) return;
   for (MarginTier& tier : tiers_) tier.members.erase(i);
   touching_.erase(i);
 }

@@ -48,12 +48,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       fastest_host_rate_1_s_(std::max(scenario.excitation.angular_frequency_rad_s(),
                                       std::sqrt(scenario.host.stiffness_N_m / scenario.host.mass_kg))),
       particles_(initial),
-      counter_(initial.size(), 0),
-      cell_(initial.size()),
-      t_cross_s_(initial.size(), never),
-      host_stamp_(initial.size(), 0),
-      last_collision_s_(initial.size(), -never),
-      riding_(initial.size(), 0),
+      sphere_(initial.size()),
       jam_{-1.0, std::vector<int>(initial.size(), 0), std::vector<std::vector<int>>(initial.size()),
            std::vector<std::uint8_t>(initial.size(), 0), {}, {}},
       in_jam_(initial.size(), 0),
@@ -128,7 +123,7 @@ void HardEngine::advance_to(double t_s) {
 }
 
 Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {
-  if (riding_[i]) return particles_.position_m.col(i) + host.z_m * e_z;
+  if (sphere_[i].riding) return particles_.position_m.col(i) + host.z_m * e_z;
   return flight(i).position_at(t_s_, gravity_m_s2_);
 }
 
@@ -155,7 +150,7 @@ State HardEngine::state() const {
     const int k = static_cast<int>(i);
     s.particles.position_m.col(i) = position_now(k, host);
     s.particles.velocity_m_s.col(i) =
-        riding_[k] ? Eigen::Vector3d(host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
+        sphere_[k].riding ? Eigen::Vector3d(host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
   }
   return s;
 }
@@ -168,7 +163,7 @@ Observation HardEngine::observe() const {
   for (Eigen::Index i = 0; i < particles_.size(); ++i) {
     const int k = static_cast<int>(i);
     const double m = particles_.mass_kg[i];
-    const Eigen::Vector3d v = riding_[k] ? Eigen::Vector3d(o.host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
+    const Eigen::Vector3d v = sphere_[k].riding ? Eigen::Vector3d(o.host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
     e.particle_translational_J += 0.5 * m * v.squaredNorm();
     e.particle_rotational_J += 0.5 * particles_.moment_of_inertia(i) * particles_.angular_velocity_rad_s.col(i).squaredNorm();
     e.gravitational_potential_J -= m * gravity_m_s2_.dot(position_now(k, o.host));
@@ -266,10 +261,10 @@ bool HardEngine::is_current(const Event& e) const {
                                     1u << static_cast<unsigned>(EventKind::rider) |
                                     1u << static_cast<unsigned>(EventKind::host_margin);
   const bool stamped = (host_stamped >> static_cast<unsigned>(e.kind)) & 1u;
-  const std::uint32_t& second = e.kind == EventKind::sphere_sphere ? counter_[e.j]
-                                : stamped                          ? host_stamp_[e.i]
+  const std::uint32_t& second = e.kind == EventKind::sphere_sphere ? sphere_[e.j].counter
+                                : stamped                          ? sphere_[e.i].host_stamp
                                                                    : e.count_j;
-  return (counter_[e.i] == e.count_i) & (second == e.count_j);
+  return (sphere_[e.i].counter == e.count_i) & (second == e.count_j);
 }
 
 void HardEngine::predict(int i, std::span<const int> new_cells) {
@@ -277,7 +272,7 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   const Ballistic f = flight(i);
   const Eigen::Vector3d x = f.position_at(t, gravity_m_s2_), v = f.velocity_at(t, gravity_m_s2_);
   const double r = particles_.radius_m[i];
-  const CellCoord c = cell_[i];
+  const CellCoord c = sphere_[i].cell;
   const Eigen::Vector3d& g = gravity_m_s2_;
 
   // The next face crossing bounds the predictions of walls and host: the sphere is
@@ -310,8 +305,8 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
     face = sooner ? k : face;
   }
   const double horizon = t + crossing;
-  t_cross_s_[i] = horizon;
-  if (face >= 0) push({horizon, i, face, counter_[i], 0, EventKind::cell_crossing});
+  sphere_[i].t_cross_s = horizon;
+  if (face >= 0) push({horizon, i, face, sphere_[i].counter, 0, EventKind::cell_crossing});
 
   // The spheres in the new cells first, then which of them i meets, without branches (i
   // itself does not: it neither approaches nor recedes), then only those spheres'
@@ -323,7 +318,7 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   screen_neighbours({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count, screen_result_);
   screen_result_.for_each_met(candidate_count, [&](int k, const PairQuadratic& pair) {
     const int j = candidates[k];
-    push({t + pair.time_s(), i, j, counter_[i], counter_[j], EventKind::sphere_sphere});
+    push({t + pair.time_s(), i, j, sphere_[i].counter, sphere_[j].counter, EventKind::sphere_sphere});
   });
 
   // The side wall, if any point of the cell is within reach of it.
@@ -333,13 +328,13 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   const bool outermost = c.ix == 0 || c.iy == 0 || c.ix == grid_.nx() - 1 || c.iy == grid_.ny() - 1;
   if (outermost || far_x * far_x + far_y * far_y >= reach * reach) {
     const Approach wall = side_wall_contact(Ballistic{x, v, t}, reach, g, t, horizon, contact_tolerance_m_);
-    if (wall.contact) push({wall.t_s, i, 0, counter_[i], 0, EventKind::side_wall});
+    if (wall.contact) push({wall.t_s, i, 0, sphere_[i].counter, 0, EventKind::side_wall});
   }
 
   // Caps and the resting bed: a guard from the host's speed envelope (when the sphere
   // could reach the bed's farthest extent if the host moved at the envelope's speed),
   // or exact predictions.
-  ++host_stamp_[i];  // whatever host-dependent event i had is replaced
+  ++sphere_[i].host_stamp;  // whatever host-dependent event i had is replaced
   const double guard = t + std::min(to_lower_z[1], to_upper_z[1]);
   if (guard <= t) {
     tiers_[0].members.insert(i);
@@ -347,13 +342,13 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
     return;
   }
   leave_host_sets(i);
-  if (guard < horizon) push({guard, i, 0, counter_[i], 0, EventKind::host_check});
+  if (guard < horizon) push({guard, i, 0, sphere_[i].counter, 0, EventKind::host_check});
 }
 
 void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   const double t = t_s_;
-  const double horizon = t_cross_s_[i];
-  const std::uint32_t stamp = ++host_stamp_[i];
+  const double horizon = sphere_[i].t_cross_s;
+  const std::uint32_t stamp = ++sphere_[i].host_stamp;
   // Down the tiers while the sphere is within each one's margin.
   for (std::size_t level = first_level; level < tiers_.size(); ++level) {
     const double end = std::min(horizon, t + tiers_[level].horizon_s);
@@ -366,7 +361,7 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
       touching_.erase(i);
       const HostContact margin = host_contact(i, end, tiers_[level].margin_m);
       if (margin.when.t_s < horizon) {
-        push({margin.when.t_s, i, static_cast<std::int32_t>(level), counter_[i], stamp, EventKind::host_margin});
+        push({margin.when.t_s, i, static_cast<std::int32_t>(level), sphere_[i].counter, stamp, EventKind::host_margin});
       }
       return;
     }
@@ -375,9 +370,9 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   touching_.insert(i);
   const HostContact exact = host_contact(i, std::min(horizon, t + tiers_.back().horizon_s), 0.0);
   if (exact.when.contact) {
-    push({exact.when.t_s, i, exact.partner, counter_[i], stamp, exact.kind});
+    push({exact.when.t_s, i, exact.partner, sphere_[i].counter, stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
-    push({exact.when.t_s, i, static_cast<std::int32_t>(tiers_.size() - 1), counter_[i], stamp, EventKind::host_margin});
+    push({exact.when.t_s, i, static_cast<std::int32_t>(tiers_.size() - 1), sphere_[i].counter, stamp, EventKind::host_margin});
   }
   // Until the event, the sphere's host-frame motion is x0 + w0 s + O(s²), its
   // acceleration relative to the host bounded by |g| + the host's acceleration bound: its
@@ -427,9 +422,9 @@ bool HardEngine::defer_touching(int i, double velocity_change_m_s) {
   const double riders =
       riding_count_ > 0 ? std::min(direction < 0 ? b.gap_above_m : b.gap_below_m, touching_slack_m_) : never;
   if (!(std::min(clearance, riders) - deviation > contact_tolerance_m_)) return false;
-  if (b.direction == 0 && b.event_s < t_cross_s_[i]) {
+  if (b.direction == 0 && b.event_s < sphere_[i].t_cross_s) {
     // Its contact (if any) is no longer exact: a margin event at the same time re-predicts it.
-    push({b.event_s, i, static_cast<std::int32_t>(tiers_.size() - 1), counter_[i], ++host_stamp_[i],
+    push({b.event_s, i, static_cast<std::int32_t>(tiers_.size() - 1), sphere_[i].counter, ++sphere_[i].host_stamp,
           EventKind::host_margin});
   }
   b.deviation_m = deviation;
@@ -562,7 +557,7 @@ void HardEngine::repredict_near_around(const Eigen::Vector3d& lab_position) {
     for (int iy = std::max(0, c.iy - 1); iy <= std::min(grid_.ny() - 1, c.iy + 1); ++iy) {
       for (int ix = std::max(0, c.ix - 1); ix <= std::min(grid_.nx() - 1, c.ix + 1); ++ix) {
         free_cells_.for_each_in(grid_.index({ix, iy, iz}), [&](int j) {
-          if (tiers_[0].members.contains(j) && cell_[j].iz == iz) predict_host_relative(j);
+          if (tiers_[0].members.contains(j) && sphere_[j].cell.iz == iz) predict_host_relative(j);
         });
       }
     }
@@ -579,7 +574,7 @@ void HardEngine::rebuild_predictions() {
   }
   touching_.clear();
   for (int i = 0; i < static_cast<int>(particles_.size()); ++i) {
-    if (!riding_[i]) predict(i);
+    if (!sphere_[i].riding) predict(i);
   }
   predict_bed_release();
 }
@@ -638,9 +633,9 @@ HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, 
   }
   // A sphere wedged between two bodies collides again at the same instant; keeping those
   // repeats inelastic lets the sequence die out instead of bouncing elastically forever.
-  const bool repeat = last_collision_s_[i] == t_s_ || (j >= 0 && last_collision_s_[j] == t_s_);
-  last_collision_s_[i] = t_s_;
-  if (j >= 0) last_collision_s_[j] = t_s_;
+  const bool repeat = sphere_[i].last_collision_s == t_s_ || (j >= 0 && sphere_[j].last_collision_s == t_s_);
+  sphere_[i].last_collision_s = t_s_;
+  if (j >= 0) sphere_[j].last_collision_s = t_s_;
   if (approach_speed_m_s < resting_.elastic_speed_m_s && !repeat) law.en = 1.0;
   return law;
 }
@@ -730,7 +725,7 @@ void HardEngine::merge_jam(int i) {
   for (std::size_t k = 0; k < members.size(); ++k) {
     hold |= jam_.hold[members[k]];
     for (const int j : jam_.partners[members[k]]) {
-      if (in[j] || riding_[j]) continue;
+      if (in[j] || sphere_[j].riding) continue;
       in[j] = 1;
       members.push_back(j);
     }
@@ -954,7 +949,7 @@ void HardEngine::collide_rider(int i, int j) {
 }
 
 void HardEngine::cross_face(int i, Face face) {
-  CellCoord c = cell_[i];
+  CellCoord c = sphere_[i].cell;
   const int step = face % 2 == 1 ? 1 : -1;
   switch (face / 2) {
     case 0: c.ix += step; break;
@@ -978,7 +973,7 @@ void HardEngine::cross_face(int i, Face face) {
 }
 
 void HardEngine::enter_cell(int i, const CellCoord& c) {
-  cell_[i] = c;
+  sphere_[i].cell = c;
   free_cells_.insert(i, grid_.index(c));
 }
 
@@ -1088,7 +1083,7 @@ void HardEngine::attach(int i) {
   free_cells_.remove(i);
   leave_host_sets(i);
   new_trajectory(i);
-  riding_[i] = 1;
+  sphere_[i].riding = 1;
   const Eigen::Vector3d host_frame = particles_.position_m.col(i) - host.z_m * e_z;
   particles_.position_m.col(i) = host_frame;
   particles_.velocity_m_s.col(i).setZero();
@@ -1111,7 +1106,7 @@ void HardEngine::attach(int i) {
 void HardEngine::detach(int i, const HostState& host) {
   book_host(t_s_);  // with the riding mass of the interval that ends now
   rider_cells_.remove(i);
-  riding_[i] = 0;
+  sphere_[i].riding = 0;
   new_trajectory(i);
   particles_.position_m.col(i) += host.z_m * e_z;
   particles_.velocity_m_s.col(i) = host.v_m_s * e_z;
@@ -1126,7 +1121,7 @@ void HardEngine::release_bed() {
   const HostState host = host_.at(t_s_);
   std::vector<int> released;
   for (int i = 0; i < static_cast<int>(particles_.size()); ++i) {
-    if (riding_[i]) released.push_back(i);
+    if (sphere_[i].riding) released.push_back(i);
   }
   for (const int i : released) detach(i, host);
   restart_host(host);

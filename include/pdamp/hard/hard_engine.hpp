@@ -89,7 +89,7 @@ class HardEngine final : public Engine {
   HostState host_now() const;
   /// Sphere i's trajectory changed: every event predicted for it is out of date.
   void new_trajectory(int i) {
-    ++counter_[i];
+    ++sphere_[i].counter;
     queue_.forget(i);
   }
   double host_inverse_mass_1_kg() const;
@@ -103,7 +103,7 @@ class HardEngine final : public Engine {
   /// Predicts every event of free sphere i anew (its trajectory changed).
   void predict(int i) {
     Around around;
-    grid_.block(cell_[i], grid_.cell_count(), around);  // the empty stand-in beyond the sides
+    grid_.block(sphere_[i].cell, grid_.cell_count(), around);  // the empty stand-in beyond the sides
     predict(i, around);
   }
   /// Predicts sphere i's events anew, but its contacts only with the spheres in
@@ -187,8 +187,17 @@ class HardEngine final : public Engine {
   // Spheres: free ones hold lab position and velocity at t_ref; riding ones hold their
   // host-frame position (lab position minus z_host e_z).
   PackedParticles particles_;
-  std::vector<std::uint32_t> counter_;  ///< bumped whenever a sphere's trajectory changes
-  std::vector<CellCoord> cell_;         ///< lab cell of each free sphere (unwrapped z)
+  /// What the events touch of each sphere besides its flight, kept together: one cache
+  /// line a sphere, not one per array.
+  struct SphereState {
+    CellCoord cell{};                  ///< lab cell of a free sphere (unwrapped z)
+    std::uint32_t counter = 0;         ///< bumped whenever its trajectory changes
+    std::uint32_t host_stamp = 0;      ///< bumped whenever its host-dependent event is replaced
+    double t_cross_s = never;          ///< when a free sphere next crosses a cell face
+    double last_collision_s = -never;  ///< when it last collided
+    std::uint8_t riding = 0;           ///< it rides with the host
+  };
+  std::vector<SphereState> sphere_;
   /// The 3 × 3 × 3 cells around a free sphere's cell (CellGrid::block), worked out at
   /// each prediction. Beyond the grid's sides an empty cell stands in, so that gathering
   /// the neighbours is a loop of fixed length and the layer entered at a face crossing is
@@ -196,10 +205,6 @@ class HardEngine final : public Engine {
   using Around = std::array<int, 27>;
   /// The 3 × 3 cells of Around beyond one face: those a face crossing brings in.
   using Layer = std::array<int, 9>;
-  std::vector<double> t_cross_s_;       ///< when each free sphere next crosses a cell face
-  std::vector<std::uint32_t> host_stamp_;  ///< bumped whenever a sphere's host-dependent event is replaced
-  std::vector<double> last_collision_s_;
-  std::vector<std::uint8_t> riding_;
   /// The collisions of free spheres at the instant t_s: per sphere how many, with which
   /// free spheres, and which parts of the host (Hold bits).
   struct Jam {

@@ -163,7 +163,8 @@ Observation HardEngine::observe() const {
   for (Eigen::Index i = 0; i < particles_.size(); ++i) {
     const int k = static_cast<int>(i);
     const double m = particles_.mass_kg[i];
-    const Eigen::Vector3d v = sphere_[k].riding ? Eigen::Vector3d(o.host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
+    const Eigen::Vector3d v =
+        sphere_[k].riding ? Eigen::Vector3d(o.host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
     e.particle_translational_J += 0.5 * m * v.squaredNorm();
     e.particle_rotational_J += 0.5 * particles_.moment_of_inertia(i) * particles_.angular_velocity_rad_s.col(i).squaredNorm();
     e.gravitational_potential_J -= m * gravity_m_s2_.dot(position_now(k, o.host));
@@ -372,7 +373,8 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   if (exact.when.contact) {
     push({exact.when.t_s, i, exact.partner, sphere_[i].counter, stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
-    push({exact.when.t_s, i, static_cast<std::int32_t>(tiers_.size() - 1), sphere_[i].counter, stamp, EventKind::host_margin});
+    const auto last_tier = static_cast<std::int32_t>(tiers_.size() - 1);
+    push({exact.when.t_s, i, last_tier, sphere_[i].counter, stamp, EventKind::host_margin});
   }
   // Until the event, the sphere's host-frame motion is x0 + w0 s + O(s²), its
   // acceleration relative to the host bounded by |g| + the host's acceleration bound: its

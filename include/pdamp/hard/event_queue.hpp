@@ -49,7 +49,8 @@ enum class EventKind : std::uint8_t {
 struct Event {
   double t_s;
   std::int32_t i;          ///< the particle (−1 for bed_release)
-  std::int32_t j;          ///< the partner particle, the crossed face, or the tier a host_margin is of (its descent resumes there)
+  /// The partner particle, the crossed face, or the tier a host_margin is of (its descent resumes there).
+  std::int32_t j;
   std::uint32_t count_i;   ///< i's trajectory counter when predicted
   std::uint32_t count_j;   ///< j's counter (sphere_sphere), i's host stamp (caps, rider, host_margin) or the host epoch (bed_release)
   EventKind kind;
@@ -183,9 +184,9 @@ class EventQueue {
       ++k;
     }
     keyed.index = static_cast<std::uint32_t>(best);
-    if (!list.empty() && keyed.place != Place::none && keyed.t_s == list[best].t_s && keyed.tie == tie_key(list[best])) {
-      return;  // the same event, perhaps moved
-    }
+    const bool same_event = !list.empty() && keyed.place != Place::none && keyed.t_s == list[best].t_s &&
+                            keyed.tie == tie_key(list[best]);
+    if (same_event) return;  // perhaps moved in the list
     leave(owner);
     if (list.empty()) return;
     keyed.t_s = list[best].t_s;
@@ -301,7 +302,8 @@ class EventQueue {
   std::vector<std::vector<Event>> lists_;  ///< each owner's events, unsorted
   std::vector<Keyed> keyed_;
   std::vector<int> dirty_;                ///< owners whose events changed since the last top()
-  std::vector<std::int32_t> buckets_;     ///< the first owner in each later bucket's list (slot = bucket modulo their number)
+  /// The first owner in each later bucket's list (its slot: the bucket modulo their number).
+  std::vector<std::int32_t> buckets_;
   Heap current_;  ///< entries of the current bucket (and any earlier: see enter)
   Heap beyond_;   ///< entries past the calendar's last bucket
   double origin_s_ = 0.0;

@@ -242,7 +242,8 @@ class HardEngine final : public Engine {
   /// as a lower bound (defer_touching) instead of redoing it.
   struct TouchingBound {
     double event_s = never;  ///< its host-dependent event (or its next face crossing)
-    double lowest_m = 0.0, highest_m = 0.0;  ///< its centre's host-frame heights until then, on the trajectory predicted with
+    /// Its centre's host-frame heights until then, on the trajectory it was predicted with.
+    double lowest_m = 0.0, highest_m = 0.0;
     /// Lower bounds until then on its gaps to the riders searched whose centres lie above
     /// its lowest height, and to those below its highest.
     double gap_above_m = never, gap_below_m = never;

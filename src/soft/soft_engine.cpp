@@ -307,9 +307,11 @@ void SoftEngine::refresh_neighbours() {
   host_z_at_rebuild_ = host_.z_m;
   const int n = sphere_count();
   most_pairs_in_a_chunk_ = 0;
-  for (int first = 0; first < n; first += chunk_size) {
-    const int pairs = neighbours_.first(std::min(n, first + chunk_size)) - neighbours_.first(first);
-    most_pairs_in_a_chunk_ = std::max(most_pairs_in_a_chunk_, pairs);
+  farthest_partner_.assign(chunk_count(), -1);
+  for (int c = 0; c < chunk_count(); ++c) {
+    const int k_begin = neighbours_.first(c * chunk_size), k_end = neighbours_.first(std::min(n, (c + 1) * chunk_size));
+    most_pairs_in_a_chunk_ = std::max(most_pairs_in_a_chunk_, k_end - k_begin);
+    for (int k = k_begin; k < k_end; ++k) farthest_partner_[c] = std::max(farthest_partner_[c], neighbours_.partner(k));
   }
 }
 
@@ -680,11 +682,13 @@ void SoftEngine::book_contact(const ContactForce<Real>& f, const Vec3<Real>& tor
 }
 
 void SoftEngine::add_reactions() {
-  // Each thread adds the reactions on a range of spheres, chunk by chunk in order: every
-  // sphere takes its reactions in the same order on any number of threads.
+  // Each thread adds the reactions on a range of chunks, chunk by chunk in order: every
+  // sphere takes its reactions in the same order on any number of threads. A chunk's
+  // partners come after its own spheres and no further than its farthest partner.
   auto add_on = [&](int begin, int end) {
-    for (const std::vector<Reaction>& chunk_reactions : reactions_) {
-      for (const Reaction& r : chunk_reactions) {
+    for (int c = 0; c < chunk_count() && c * chunk_size < end; ++c) {
+      if (farthest_partner_[c] < begin) continue;
+      for (const Reaction& r : reactions_[c]) {
         if (r.partner < begin || r.partner >= end) continue;
         force_.x[r.partner] += r.force_N.x;
         force_.y[r.partner] += r.force_N.y;
@@ -703,7 +707,7 @@ void SoftEngine::add_reactions() {
 #pragma omp parallel
   {
     const int threads = omp_get_num_threads(), thread = omp_get_thread_num();
-    add_on(n * thread / threads, n * (thread + 1) / threads);
+    add_on(chunk_count() * thread / threads * chunk_size, std::min(n, chunk_count() * (thread + 1) / threads * chunk_size));
   }
 }
 

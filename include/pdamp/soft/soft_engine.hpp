@@ -191,6 +191,7 @@ class SoftEngine final : public Engine {
   };
   std::vector<PassScratch> scratch_;
   int most_pairs_in_a_chunk_ = 0;
+  std::vector<int> farthest_partner_;  ///< of each chunk's pairs (−1 if it has none)
   bool needs_rebuild_ = true;
   double host_z_at_rebuild_ = 0.0;
   /// Each particle's open contact with the side wall, the bottom and the top (indexed by

@@ -12,6 +12,7 @@
 
 #include "commands.hpp"
 #include "pdamp/errors.hpp"
+#include "pdamp/soft/simd_path.hpp"
 #include "pdamp/version.hpp"
 
 namespace po = boost::program_options;
@@ -86,7 +87,10 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     options.add_options()("model", po::value<std::string>(), "soft (Hertz DEM) or hard (event-driven)")(
         "duration", po::value<std::string>(), "simulated time in s (same as --set run.duration_s=S)")(
         "threads", po::value<std::string>(),
-        "threads for the soft engine (default: one per core); results are the same bits for any number");
+        "threads for the soft engine (default: one per core); results are the same bits for any number")(
+        "simd", po::value<std::string>(),
+        "the soft engine's instruction set, sse2, avx2 or avx512 (default: the widest this CPU runs); results are the "
+        "same bits on each");
     const auto vm = parse(args, options);
     if (vm.count("help")) {
       std::cout << options << "\n";
@@ -96,6 +100,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     ScenarioRequest request = scenario_request(vm, command);
     if (vm.count("duration")) request.overrides.push_back("run.duration_s=" + vm["duration"].as<std::string>());
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
+    if (vm.count("simd")) soft::set_default_simd_path(soft::parse_simd_path(vm["simd"].as<std::string>(), "--simd"));
     return run_command(request, required(vm, "model", command), vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0);
   }
   if (command == "compare") {

@@ -1,61 +1,65 @@
 #include "pdamp/soft/neighbour_list.hpp"
 
 #include <algorithm>
-#include <array>
-
-#include "pdamp/soft/contact_table.hpp"
+#include <numeric>
 
 namespace pdamp::soft {
 
-void NeighbourList::rebuild(const std::vector<Eigen::Vector3d>& positions, const std::vector<double>& radii) {
-  const int n = static_cast<int>(positions.size());
-  // The positions seen as a 3 × n matrix, without a copy (a Vector3d is three doubles).
-  cells_.build(grid_, Eigen::Map<const Eigen::Matrix3Xd>(n > 0 ? positions.front().data() : nullptr, 3, n));
+NeighbourList::NeighbourList(const CellGrid& grid, double skin_m) : grid_(grid), skin_m_(skin_m) {}
 
-  // Only the open contacts are set aside to be handed over.
-  kept_first_.assign(n + 1, 0);
-  kept_.clear();
-  const int listed = first_.empty() ? 0 : n;  // none before the first build
-  for (int i = 0; i < listed; ++i) {
-    kept_first_[i] = static_cast<int>(kept_.size());
-    for (int k = first_[i]; k < first_[i + 1]; ++k) {
-      if (contact_[k] != ContactTable::none) kept_.push_back({partner_[k], contact_[k]});
-    }
+int NeighbourList::rank_of(double x, double y, double z) const {
+  const CellCoord c = grid_.coord_of(Eigen::Vector3d(x, y, z));
+  const int nz = grid_.nz();
+  return rank(c.ix, c.iy, ((c.iz % nz) + nz) % nz);
+}
+
+const std::vector<int>& NeighbourList::sort_by_cell(const SphereBalls& balls) {
+  const int n = balls.size();
+  // A counting sort by cell rank.
+  std::vector<int> rank_of_sphere(n);  // not kept: its memory serves the rest of the rebuild
+  cell_first_.assign(grid_.cell_count() + 1, 0);
+  for (int i = 0; i < n; ++i) {
+    rank_of_sphere[i] = rank_of(balls[i].x, balls[i].y, balls[i].z);
+    ++cell_first_[rank_of_sphere[i] + 1];
   }
-  std::fill(kept_first_.begin() + listed, kept_first_.end(), static_cast<int>(kept_.size()));
+  for (std::size_t r = 1; r < cell_first_.size(); ++r) cell_first_[r] += cell_first_[r - 1];
+  order_.resize(n);
+  for (int i = 0; i < n; ++i) order_[cell_first_[rank_of_sphere[i]]++] = i;
+  // The fill cursors have moved each cell's start to the next cell's: shift them back.
+  std::copy_backward(cell_first_.begin(), cell_first_.end() - 1, cell_first_.end());
+  cell_first_.front() = 0;
+  return order_;
+}
 
+void NeighbourList::start_build(int parts) {
+  const int n = static_cast<int>(order_.size());
   first_.assign(n + 1, 0);
-  partner_.clear();
-  std::array<int, 27> cells{};
-  for (int i = 0; i < n; ++i) {
-    first_[i] = static_cast<int>(partner_.size());
-    const int count = grid_.neighbours(grid_.coord_of(positions[i]), cells);
-    for (int c = 0; c < count; ++c) {
-      for (const int j : cells_.particles_in(cells[c])) {
-        if (j <= i) continue;
-        const double reach = radii[i] + radii[j] + skin_m_;
-        if ((positions[i] - positions[j]).squaredNorm() < reach * reach) partner_.push_back(j);
-      }
-    }
+  // Parts of about n / parts spheres, each a run of whole cells.
+  part_cell_.resize(parts + 1);
+  for (int p = 0; p < parts; ++p) {
+    part_cell_[p] = static_cast<int>(std::lower_bound(cell_first_.begin(), cell_first_.end() - 1, n * p / parts) -
+                                     cell_first_.begin());
   }
-  first_[n] = static_cast<int>(partner_.size());
-  owner_.resize(partner_.size());
-  for (int i = 0; i < n; ++i) std::fill(owner_.begin() + first_[i], owner_.begin() + first_[i + 1], i);
+  part_cell_[parts] = grid_.cell_count();
+  part_pairs_.assign(parts, 0);
+  more_partners_.resize(parts - 1);
+}
 
-  // Hand over: mark i's kept partners, look up the new pairs, unmark.
-  contact_.assign(partner_.size(), ContactTable::none);
-  old_slot_.assign(n, -1);
-  for (int i = 0; i < n; ++i) {
-    if (kept_first_[i] == kept_first_[i + 1]) continue;
-    for (int s = kept_first_[i]; s < kept_first_[i + 1]; ++s) old_slot_[kept_[s].partner] = s;
-    for (int k = first_[i]; k < first_[i + 1]; ++k) {
-      const int s = old_slot_[partner_[k]];
-      if (s < 0) continue;
-      contact_[k] = kept_[s].contact;
-    }
-    for (int s = kept_first_[i]; s < kept_first_[i + 1]; ++s) old_slot_[kept_[s].partner] = -1;
+void NeighbourList::finish_build() {
+  const int n = static_cast<int>(order_.size()), parts = static_cast<int>(part_pairs_.size());
+  int pairs = part_pairs_[0];
+  pairs_.resize(std::reduce(part_pairs_.begin(), part_pairs_.end()) + padding);
+  for (int p = 1; p < parts; ++p) {
+    for (int i = cell_first_[part_cell_[p]]; i < cell_first_[part_cell_[p + 1]]; ++i) first_[i] += pairs;
+    std::copy_n(more_partners_[p - 1].begin(), part_pairs_[p], pairs_.begin() + pairs);
+    pairs += part_pairs_[p];
   }
-
+  first_[n] = pairs;
+  for (int i = 0; i < n; ++i) {
+    for (int k = first_[i]; k < first_[i + 1]; ++k) pairs_[k] = pairs_[k] << group_bits | (i & (group_size - 1));
+  }
+  std::fill(pairs_.begin() + pairs, pairs_.end(), 0);
+  contact_.assign(pairs + padding, ContactTable::none);
   ++rebuilds_;
 }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "pdamp/soft/contact_law.hpp"
+#include "pdamp/soft/sphere_arrays.hpp"
 
 namespace pdamp::soft {
 
@@ -15,59 +16,47 @@ class ContactTable {
   /// contact is read the same way whether it is open or not.
   static constexpr int none = 0;
 
-  struct Entry {
-    ContactHistory<> history;
-    /// The force and torque a pair contact put on its partner at the last force computation.
-    Vec3<double> reaction_force_N, reaction_torque_N_m;
-    int partner = -1;  ///< −1 for a wall contact or a free entry
-  };
-
   ContactTable() : entries_(1) {}
 
-  const Entry& operator[](int contact) const { return entries_[contact]; }
-  Entry& operator[](int contact) { return entries_[contact]; }
-  /// All entries, open or free (a free entry has partner −1).
-  const std::vector<Entry>& entries() const { return entries_; }
+  const ContactHistory<>& operator[](int contact) const { return entries_[contact]; }
+  ContactHistory<>& operator[](int contact) { return entries_[contact]; }
+  /// The entries as one array of doubles, for SIMD gathers.
+  const double* data() const { return &entries_.front().tangential_displacement_m.x; }
 
-  /// A new entry, reusing a closed contact's.
-  int open(int partner) {
-    int contact = static_cast<int>(entries_.size());
-    if (free_.empty()) {
-      // Grown by a quarter, not doubled: the tables are most of the engine's memory.
-      if (entries_.size() == entries_.capacity()) entries_.reserve(entries_.size() + entries_.size() / 4 + 16);
-      entries_.emplace_back();
-    } else {
-      contact = free_.back();
+  /// A new entry (to be written), reusing a closed contact's.
+  int open() {
+    if (!free_.empty()) {
+      const int contact = free_.back();
       free_.pop_back();
+      return contact;
     }
-    entries_[contact].partner = partner;
-    return contact;
+    return append({});
   }
 
-  void close(int contact) {
-    entries_[contact].partner = -1;
-    free_.push_back(contact);
-  }
+  void close(int contact) { free_.push_back(contact); }
 
-  /// Empties the table (keeping its memory).
-  void clear() {
+  /// Empties the table, with room for `entries` and some more.
+  void clear(int entries) {
     entries_.resize(1);
+    entries_.reserve(entries + entries / 16 + 4);
     free_.clear();
   }
-  /// Appends a copy of another table's entry; returns its index here.
-  int append(const Entry& entry) {
-    entries_.push_back(entry);
-    return static_cast<int>(entries_.size()) - 1;
+  /// Empties the table and frees its memory.
+  void release() {
+    entries_ = std::vector<ContactHistory<>>(1);
+    free_ = std::vector<int>();
   }
-  /// Takes over another table's entries, keeping its own memory where it suffices.
-  void copy_from(const ContactTable& other) {
-    entries_.assign(other.entries_.begin(), other.entries_.end());
-    free_.assign(other.free_.begin(), other.free_.end());
+  /// Appends an entry; returns its index.
+  int append(const ContactHistory<>& history) {
+    push_back_compactly(entries_, history);
+    return static_cast<int>(entries_.size()) - 1;
   }
 
  private:
-  std::vector<Entry> entries_;
+  std::vector<ContactHistory<>> entries_;
   std::vector<int> free_;
 };
+
+static_assert(sizeof(ContactHistory<>) == 7 * sizeof(double), "entries are gathered as arrays of seven doubles");
 
 }  // namespace pdamp::soft

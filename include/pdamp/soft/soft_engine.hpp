@@ -4,6 +4,7 @@
 /// Verlet neighbour list on the shared cell grid. The reference model.
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,8 @@
 #include "pdamp/soft/contact_law.hpp"
 #include "pdamp/soft/contact_table.hpp"
 #include "pdamp/soft/neighbour_list.hpp"
+#include "pdamp/soft/simd_path.hpp"
+#include "pdamp/soft/sphere_arrays.hpp"
 
 namespace pdamp::soft {
 
@@ -24,7 +27,10 @@ struct SoftEngineOptions {
   /// resistance). Zero in every run.
   double settling_drag_1_s = 0.0;
   /// Neighbour-list skin as a fraction of the largest diameter.
-  double skin_fraction = 0.3;
+  double skin_fraction = 0.2;
+  /// The instruction set of the kernels (default_simd_path() if not given); the results
+  /// are the same bits on every path.
+  std::optional<SimdPath> simd_path;
 };
 
 class SoftEngine final : public Engine {
@@ -40,6 +46,7 @@ class SoftEngine final : public Engine {
 
   /// Kinetic energy of the particles, translational plus rotational (J).
   double particle_kinetic_J() const;
+  SimdPath simd_path() const { return simd_path_; }
 
  private:
   // The phases of a velocity-Verlet step (advance_to strings them together).
@@ -53,67 +60,143 @@ class SoftEngine final : public Engine {
 
   double host_acceleration_m_s2() const;
 
+  // The kernels, run chunk by chunk in the instruction set of simd_path_ (soft_engine.cpp).
+  // Always inlined, down to their last part, into a function compiled for that instruction
+  // set: none of them exists on its own, compiled for another.
+  struct DriftPass;
+  struct ForcePass;
+  struct BuildPass;
+  /// The pass's kernel compiled for simd_path_: it runs pass.run<Real>(c) for chunk (or part) c.
+  template <class Pass>
+  auto kernel() const -> void (*)(Pass&, int);
+  /// Runs the kernel for c = 0, ..., count − 1 on the threads.
+  template <class Pass>
+  void run_kernel(Pass& pass, int count);
+  /// Kicks and drifts the spheres of chunk c; returns whether one has moved past half the skin.
+  template <class Real>
+  [[gnu::always_inline]] inline bool drift_chunk(int c, double kick_s, double dt_s);
+  template <class Real>
+  [[gnu::always_inline]] inline void force_chunk(int c, double dt_s);
+
   /// What one chunk of spheres adds up in a force computation.
   struct ChunkTotals {
     double impact_J = 0.0, friction_J = 0.0, elastic_J = 0.0, on_host_N = 0.0, max_overlap_ratio = 0.0;
     std::int64_t contacts = 0;
-    void record_contact(double overlap_m, double radius_m);
+    void record_contact(double overlap_ratio);  ///< overlap / smaller radius
   };
   /// Spheres per chunk: fixed, so that sums are formed in the same order on any number of threads.
-  static constexpr int chunk_size = 64;
+  static constexpr int chunk_size = NeighbourList::group_size;
   /// Below this many spheres a step is too short to share between threads.
   static constexpr int parallel_minimum = 512;
-  /// Force and torque on one body.
-  struct Wrench {
-    Eigen::Vector3d force_N = Eigen::Vector3d::Zero(), torque_N_m = Eigen::Vector3d::Zero();
+  int chunk_count() const { return (sphere_count() + chunk_size - 1) / chunk_size; }
+  bool runs_in_parallel() const;
+  int sphere_count() const { return balls_.size(); }
+
+  /// Force and torque on each sphere of a chunk, as it builds up in the force pass.
+  struct ChunkWrenches {
+    double fx[chunk_size], fy[chunk_size], fz[chunk_size], tx[chunk_size], ty[chunk_size], tz[chunk_size];
   };
-  /// A listed pair whose contact is evaluated this step: its owner and its index in the list.
-  struct PairToEvaluate {
-    int owner, pair;
+  /// The force and torque a pair contact puts on its partner, added after the force pass.
+  struct Reaction {
+    Vec3<double> force_N, torque_N_m;
+    int partner;
   };
-  // Inlined into the force pass so that the chunk's totals stay in registers: the pass's
-  // stores (histories, reactions) might otherwise alias them and force a store and reload
-  // per contact.
-  [[gnu::always_inline]] inline Wrench start_forces(int i) const;
-  /// Lists the pairs of spheres [first, end) that touch or were touching; returns how many.
-  [[gnu::always_inline]] inline int list_pairs_to_evaluate(int first, int end, PairToEvaluate* out) const;
-  /// Evaluates lane_count<Real> pairs at once, adding to the wrenches `on_chunk[owner − first]`.
+  // The force pass's parts; inlined, the chunk's totals also stay in registers (the pass's
+  // stores, histories and reactions, might otherwise alias them and force a store and
+  // reload per contact).
   template <class Real>
-  [[gnu::always_inline]] inline void add_pair_contacts(const PairToEvaluate* pairs, double dt_s, int first,
-                                                       ContactTable& contacts, ChunkTotals& totals, Wrench* on_chunk);
-  [[gnu::always_inline]] inline void add_wall_contacts(int i, double dt_s, ContactTable& contacts, ChunkTotals& totals,
-                                                       Wrench& on_i);
+  [[gnu::always_inline]] inline void start_forces(int first, int end, ChunkWrenches& on_chunk) const;
+  /// Lists the pairs of spheres [first, end) that touch or were touching; returns how many.
+  template <class Real>
+  [[gnu::always_inline]] inline int list_pairs_to_evaluate(int first, int end, int* out) const;
+  /// Spheres per wall, each list with a register's worth of room past its last sphere.
+  using WallLists = std::array<std::array<int, chunk_size + NeighbourList::padding>, 3>;
+  /// Lists, for each wall, the spheres of [first, end) that touch it or were touching;
+  /// returns how many.
+  template <class Real>
+  [[gnu::always_inline]] inline std::array<int, 3> list_wall_contacts_to_evaluate(int first, int end,
+                                                                                 WallLists& out) const;
+  /// Evaluates the pairs `pairs[0, count)` of chunk c (count ≤ lanes; `pairs` holds a
+  /// register's worth), adding to the chunk's wrenches and writing the reactions of those
+  /// touching at `reactions[touching_pairs++]`.
+  template <class Real>
+  [[gnu::always_inline]] inline void add_pair_contacts(const int* pairs, int count, double dt_s, int c,
+                                                       ChunkTotals& totals, ChunkWrenches& on_chunk,
+                                                       Reaction* reactions, int& touching_pairs);
+  /// Evaluates the contacts of `spheres[0, count)` of chunk c with one wall, likewise.
+  template <class Real, int wall>
+  [[gnu::always_inline]] inline void add_wall_contacts(const int* spheres, int count, double dt_s, int c,
+                                                       ChunkTotals& totals, ChunkWrenches& on_chunk);
+  /// The history of entry[l] of the table, in lane l.
+  template <class Real>
+  [[gnu::always_inline]] static inline ContactHistory<Real> gather_histories(const ContactTable& contacts,
+                                                                            const int* entry);
+  /// Adds lane l of a contact evaluated for the sphere in `slot` of its chunk: its force and
+  /// torque (which acts with the opposite sign), its energy, and its history, opened, kept
+  /// or closed at `open`.
+  template <class Real>
+  [[gnu::always_inline]] static inline void book_contact(const ContactForce<Real>& f, const Vec3<Real>& torque,
+                                                         const ContactHistory<Real>& h, int l, bool touching,
+                                                         double overlap_ratio, int& open, ContactTable& contacts,
+                                                         ChunkTotals& totals, ChunkWrenches& on_chunk, int slot);
   void add_reactions();
-  void compact_contact_tables();
+
+  // Renumbering the spheres at each neighbour-list build (refresh_neighbours).
+  void set_aside_open_contacts(const std::vector<int>& order);
+  void reorder_spheres(const std::vector<int>& order);
+  void hand_over_contacts(const std::vector<int>& order);
 
   Scenario scenario_;
   SoftEngineOptions options_;
+  SimdPath simd_path_;
   HostModel host_model_;
   Cavity cavity_;
   double dt_s_;
   double t_s_ = 0.0;
   double end_of_advance_s_ = -1.0;  ///< set for the step that must end exactly at advance_to's target
 
-  // Particles (SI), in the initial order. Between the kicks v_ and w_ are the half-step
-  // velocities, which the contact forces (dashpots included) are computed with.
-  std::vector<Eigen::Vector3d> x_, v_, w_, force_, torque_;
-  std::vector<double> radius_, mass_, inv_mass_, inv_inertia_;
+  // Particles (SI), in cell order: slot s holds the scenario's sphere original_index_[s].
+  // Between the kicks v_ and w_ are the half-step velocities, which the contact forces
+  // (dashpots included) are computed with.
+  SphereBalls balls_;
+  SphereMotions v_, w_;
+  SphereVectors force_, torque_, x_at_rebuild_;
+  SphereScalars mass_;
+  std::vector<int> original_index_;
+  std::vector<bool> visited_;  ///< scratch for renumbering
   NeighbourList neighbours_;
-  /// The open contacts of each chunk's spheres, pairs and walls, with the reactions the
-  /// pair contacts put on their partners (added to the partners after the chunks, in
-  /// chunk order).
-  std::vector<ContactTable> contact_tables_;
-  ContactTable compacted_table_;  ///< where compact_contact_tables builds each chunk's table
+  /// The open contacts of each chunk's spheres, pairs and walls; and the reactions of its
+  /// pair contacts on their partners at the last force computation (added to the partners
+  /// after the chunks, in chunk order).
+  std::vector<ContactTable> contact_tables_, next_contact_tables_;
+  std::vector<std::vector<Reaction>> reactions_;
+  /// During a rebuild: the open pair contacts, by their new owner
+  /// ([kept_first_[i], kept_first_[i + 1]) for sphere i), and where partner j of the
+  /// current owner is kept, or −1.
+  struct KeptContact {
+    int partner, table, entry;
+    bool flipped;  ///< owner and partner swapped by the renumbering: the history changes sign
+  };
+  std::vector<KeptContact> kept_;
+  std::vector<int> kept_first_, kept_slot_;
+  /// During a rebuild: the last new chunk that reads each old table, and the old tables
+  /// in the order they are freed.
+  std::vector<int> last_reader_, release_order_;
   std::vector<ChunkTotals> chunk_totals_;
-  /// Per thread: the pairs of its current chunk to evaluate (as long as the chunk's pairs).
-  std::vector<std::vector<PairToEvaluate>> pairs_to_evaluate_;
+  /// Per thread: the contacts of its current chunk to evaluate, pairs (room for all the
+  /// chunk's pairs) and spheres at each wall.
+  struct PassScratch {
+    std::vector<int> pairs;
+    WallLists wall_spheres;
+  };
+  std::vector<PassScratch> scratch_;
   int most_pairs_in_a_chunk_ = 0;
-  std::vector<Eigen::Vector3d> x_at_rebuild_;
+  std::vector<int> farthest_partner_;  ///< of each chunk's pairs (−1 if it has none)
   bool needs_rebuild_ = true;
   double host_z_at_rebuild_ = 0.0;
-  /// Each particle's open contacts with the side wall, the bottom and the top, in its
-  /// chunk's table (ContactTable::none if apart).
-  std::vector<std::array<int, 3>> wall_contacts_;
+  /// Each particle's open contact with the side wall, the bottom and the top (indexed by
+  /// wall, then particle), in its chunk's table (ContactTable::none if apart).
+  std::array<std::vector<int>, 3> wall_contacts_;
 
   // Host.
   HostState host_;

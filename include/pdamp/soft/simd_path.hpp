@@ -1,0 +1,28 @@
+#pragma once
+/// The instruction sets the soft engine's kernels are compiled for, one chosen at run time
+/// (the default build stays portable to any x86-64): SSE2 with 2 lanes, AVX2 with 4,
+/// AVX-512 with 8. Every lane performs the scalar code's IEEE operations in its order, so
+/// all paths give the same bits.
+
+#include <optional>
+#include <string_view>
+
+namespace pdamp::soft {
+
+enum class SimdPath { sse2, avx2, avx512 };
+
+std::string_view to_string(SimdPath path);
+/// Parses "sse2", "avx2" or "avx512"; throws InputError naming `what` otherwise.
+SimdPath parse_simd_path(std::string_view text, std::string_view what);
+/// Whether this CPU (and its operating system) can run the path.
+bool is_available(SimdPath path);
+/// The widest path this CPU runs.
+SimdPath widest_simd_path();
+
+/// The path engines take unless their options say otherwise: the widest, or what
+/// set_default_simd_path chose for the process (as omp_set_num_threads does for threads).
+SimdPath default_simd_path();
+/// Throws InputError if the CPU cannot run `path`.
+void set_default_simd_path(SimdPath path);
+
+}  // namespace pdamp::soft

@@ -257,8 +257,54 @@ DamperOutcome run_damper(Model model, const Scenario& s, const Particles& bed) {
 
 }  // namespace
 
+namespace {
+
+/// Per-cycle psi of one trajectory is chaotic: nudging one sphere of the settled bed by
+/// 1e-9 m/s moves the hard model's second-cycle psi by up to 0.0075 and the soft model's by
+/// 0.003 (measured), as much as the models' difference. So the models are compared on the
+/// mean of several trajectories that differ only by such nudges, and the chaotic scatter
+/// left in each mean (its standard error) is part of the allowance.
+struct Ensemble {
+  double particles_J = 0.0, total_J = 0.0;
+  std::vector<double> psi, psi_particles, gamma;  ///< mean per cycle
+  std::vector<double> psi_variance_of_mean;       ///< per cycle, (standard error)^2
+};
+
+Ensemble run_ensemble(Model model, const Scenario& s, const Particles& settled, int members) {
+  std::vector<DamperOutcome> runs;
+  for (int m = 0; m < members; ++m) {
+    Particles bed = settled;
+    bed.velocity_m_s(2, 0) += 1e-9 * m;  // m/s; member 0 is the settled bed itself
+    runs.push_back(run_damper(model, s, bed));
+  }
+  Ensemble e;
+  const std::size_t cycles = runs.front().cycles.size();
+  for (const DamperOutcome& r : runs) {
+    REQUIRE(r.cycles.size() == cycles);
+    e.particles_J += r.particles_J / members;
+    e.total_J += r.total_J / members;
+  }
+  for (std::size_t k = 0; k < cycles; ++k) {
+    double psi = 0, particles = 0, gamma = 0;
+    for (const DamperOutcome& r : runs) {
+      psi += r.cycles[k].psi / members;
+      particles += (r.cycles[k].psi_impact + r.cycles[k].psi_friction) / members;
+      gamma += *r.cycles[k].gamma / members;
+    }
+    double spread = 0;
+    for (const DamperOutcome& r : runs) spread += (r.cycles[k].psi - psi) * (r.cycles[k].psi - psi);
+    e.psi.push_back(psi);
+    e.psi_particles.push_back(particles);
+    e.gamma.push_back(gamma);
+    e.psi_variance_of_mean.push_back(spread / (members - 1) / members);
+  }
+  return e;
+}
+
+}  // namespace
+
 TEST_CASE("a small damper (100 spheres, 0.3 s): both models take the same energy out, within the soft model's own k_n sensitivity") {
-  // Both models start from one settled bed; the hard one uses the calibrated e_n(v), β0(v).
+  // Both models start from one settled bed; the hard one uses the calibrated e_n(v), beta0(v).
   // Isolated impacts then agree to the calibration's accuracy (tests above). What the hard
   // model cannot represent is a contact that lasts: the paper's k_n is far softer than lead
   // (overlaps reach 17 % of a radius here), and how the dense slug's enduring contacts
@@ -269,9 +315,10 @@ TEST_CASE("a small damper (100 spheres, 0.3 s): both models take the same energy
   const Scenario small = load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated"});
   const Scenario stiffer = load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated", "soft.kn_N_m1_5=3.6e6"});
   const Particles bed = soft::settle_bed(small, place_particles(small.particles, small.cavity, small.host.z0_m)).particles;
-  const DamperOutcome soft = run_damper(Model::soft, small, bed);
-  const DamperOutcome hard = run_damper(Model::hard, small, bed);
-  const DamperOutcome soft_stiffer = run_damper(Model::soft, stiffer, bed);
+  const int members = 4;
+  const Ensemble soft = run_ensemble(Model::soft, small, bed, members);
+  const Ensemble hard = run_ensemble(Model::hard, small, bed, members);
+  const Ensemble soft_stiffer = run_ensemble(Model::soft, stiffer, bed, members);
   const double sensitivity = std::abs(soft_stiffer.particles_J - soft.particles_J) / soft.particles_J;
   CAPTURE(sensitivity);
   CAPTURE(soft.particles_J);
@@ -284,17 +331,19 @@ TEST_CASE("a small damper (100 spheres, 0.3 s): both models take the same energy
   // psi(Gamma), cycle by cycle (the host rings at the same frequency in both, so the
   // cycles pair up, from Gamma = 17 down to 12 here), within twice the soft model's own
   // change of that cycle's psi when k_n is stiffened (at least the overall relative change
-  // applied to the particles' part of psi). The first cycle starts from the settled pack,
-  // which leaves the floor and lands as one dense slug: the next test's case, not this one's.
-  REQUIRE(soft.cycles.size() >= 4);
-  REQUIRE(hard.cycles.size() == soft.cycles.size());
-  REQUIRE(soft_stiffer.cycles.size() == soft.cycles.size());
-  for (std::size_t k = 1; k < soft.cycles.size(); ++k) {
-    const CycleRecord &s = soft.cycles[k], &h = hard.cycles[k];
-    const double cycle_sensitivity = std::max(std::abs(soft_stiffer.cycles[k].psi - s.psi), sensitivity * (s.psi_impact + s.psi_friction));
+  // applied to the particles' part of psi), plus two standard errors of the difference of
+  // the means. The first cycle starts from the settled pack, which leaves the floor and
+  // lands as one dense slug: the next test's case, not this one's.
+  REQUIRE(soft.psi.size() >= 4);
+  REQUIRE(hard.psi.size() == soft.psi.size());
+  REQUIRE(soft_stiffer.psi.size() == soft.psi.size());
+  for (std::size_t k = 1; k < soft.psi.size(); ++k) {
+    const double cycle_sensitivity = std::max(std::abs(soft_stiffer.psi[k] - soft.psi[k]), sensitivity * soft.psi_particles[k]);
+    const double scatter = 2 * std::sqrt(hard.psi_variance_of_mean[k] + soft.psi_variance_of_mean[k]);
     CAPTURE(k);
-    CHECK(*h.gamma == doctest::Approx(*s.gamma).epsilon(0.02));
-    CHECK(std::abs(h.psi - s.psi) <= 2 * cycle_sensitivity);
+    CAPTURE(scatter);
+    CHECK(hard.gamma[k] == doctest::Approx(soft.gamma[k]).epsilon(0.02));
+    CHECK(std::abs(hard.psi[k] - soft.psi[k]) <= 2 * cycle_sensitivity + scatter);
   }
 }
 

@@ -387,6 +387,19 @@ TEST_CASE("an impact the contact law cannot stop fails the run and says why") {
   CHECK_THROWS_WITH_AS(observe_each_microsecond(), doctest::Contains("the contact law is too soft"), RuntimeFailure);
 }
 
+TEST_CASE("SIMD paths: one this build or CPU cannot run is refused, saying which are valid") {
+  // An unoptimised build runs sse2 only (the wide kernels need inlining); sse2 always runs.
+  CHECK(is_available(SimdPath::sse2));
+  for (const SimdPath path : {SimdPath::sse2, SimdPath::avx2, SimdPath::avx512}) {
+    CAPTURE(to_string(path));
+    if (is_available(path)) {
+      CHECK_NOTHROW(require_available(path));
+    } else {
+      CHECK_THROWS_WITH_AS(require_available(path), doctest::Contains("(valid here: sse2"), InputError);
+    }
+  }
+}
+
 TEST_CASE("SIMD paths: every instruction set the CPU runs gives the same bits") {
   // An agitated bed of three full chunks and a partial one, against the walls and each other.
   const Scenario s = load_scenario(test::scenario_file("small"),

@@ -28,7 +28,21 @@ SimdPath parse_simd_path(std::string_view text, std::string_view what) {
   throw InputError(std::string(what) + " '" + std::string(text) + "': must be sse2, avx2 or avx512");
 }
 
+namespace {
+
+// The wide kernels rely on `flatten` to compile everything they call for their instruction
+// set. An unoptimised build inlines nothing, so their wide vectors would be passed to
+// helpers compiled for the baseline, which crashes: such builds run SSE2 only.
+#ifdef __OPTIMIZE__
+constexpr bool wide_kernels_built = true;
+#else
+constexpr bool wide_kernels_built = false;
+#endif
+
+}  // namespace
+
 bool is_available(SimdPath path) {
+  if (path != SimdPath::sse2 && !wide_kernels_built) return false;
   // __builtin_cpu_supports also checks that the operating system saves the wide registers.
   switch (path) {
     case SimdPath::sse2: return true;
@@ -49,8 +63,23 @@ SimdPath default_simd_path() {
   return chosen < 0 ? widest_simd_path() : static_cast<SimdPath>(chosen);
 }
 
+void require_available(SimdPath path) {
+  if (is_available(path)) return;
+  std::string message = "simd path ";
+  message += to_string(path);
+  message += wide_kernels_built ? ": this CPU cannot run it" : ": an unoptimised build runs sse2 only";
+  message += " (valid here:";
+  for (const SimdPath other : {SimdPath::sse2, SimdPath::avx2, SimdPath::avx512}) {
+    if (!is_available(other)) continue;
+    message += ' ';
+    message += to_string(other);
+  }
+  message += ')';
+  throw InputError(message);
+}
+
 void set_default_simd_path(SimdPath path) {
-  if (!is_available(path)) throw InputError("this CPU cannot run the " + std::string(to_string(path)) + " path");
+  require_available(path);
   chosen_default.store(static_cast<int>(path));
 }
 

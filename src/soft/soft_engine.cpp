@@ -136,9 +136,7 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
       dt_s_(choose_time_step_s(scenario)),
       neighbours_(make_grid(scenario, initial, options.skin_fraction * 2.0 * initial.max_radius_m()),
                   options.skin_fraction * 2.0 * initial.max_radius_m()) {
-  if (!is_available(simd_path_)) {
-    throw InputError("this CPU cannot run the soft engine's " + std::string(to_string(simd_path_)) + " path");
-  }
+  require_available(simd_path_);
   if (initial.size() > NeighbourList::max_spheres) {
     throw InputError("the soft engine holds at most " + std::to_string(NeighbourList::max_spheres) + " spheres");
   }

@@ -14,7 +14,8 @@ enum class SimdPath { sse2, avx2, avx512 };
 std::string_view to_string(SimdPath path);
 /// Parses "sse2", "avx2" or "avx512"; throws InputError naming `what` otherwise.
 SimdPath parse_simd_path(std::string_view text, std::string_view what);
-/// Whether this CPU (and its operating system) can run the path.
+/// Whether this build, this CPU and its operating system can run the path (an unoptimised
+/// build runs sse2 only).
 bool is_available(SimdPath path);
 /// The widest path this CPU runs.
 SimdPath widest_simd_path();
@@ -22,7 +23,9 @@ SimdPath widest_simd_path();
 /// The path engines take unless their options say otherwise: the widest, or what
 /// set_default_simd_path chose for the process (as omp_set_num_threads does for threads).
 SimdPath default_simd_path();
-/// Throws InputError if the CPU cannot run `path`.
+/// Throws InputError, saying why and what is valid, unless is_available(path).
+void require_available(SimdPath path);
+/// Throws as require_available does.
 void set_default_simd_path(SimdPath path);
 
 }  // namespace pdamp::soft

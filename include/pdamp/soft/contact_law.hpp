@@ -87,7 +87,8 @@ template <class Real>
   // Sliding: the force is capped and the spring keeps only what the capped force allows.
   const auto sliding = fs_sq > cap * cap;
   fs = select(sliding, fs * (cap / sqrt_of(fs_sq)), fs);
-  if (law.ks_N_m > 0.0) xi = select(sliding, -(fs + law.cs_N_s_m * tangential_velocity) / law.ks_N_m, xi);
+  // One scalar reciprocal, not a vector division per component.
+  if (law.ks_N_m > 0.0) xi = select(sliding, -(1.0 / law.ks_N_m) * (fs + law.cs_N_s_m * tangential_velocity), xi);
 
   // Apart: no force, and the spring lets go.
   fs = select(touching, fs, zero_vec3<Real>());

@@ -164,6 +164,8 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
       {{"frobnicate"}, "unknown command"},
       {{"show", "abc", "--db", db.string()}, "RUN_ID 'abc'"},
       {{"run", "--scenario", table1(), "--model", "soft", "--threads", "0", "--db", db.string()}, "--threads '0'"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--simd", "avx1024", "--db", db.string()},
+       "--simd 'avx1024': must be sse2, avx2 or avx512"},
       {{"runs", "--db", (dir / "missing.sqlite").string()}, "does not exist"},
   };
   for (const auto& c : cases) {

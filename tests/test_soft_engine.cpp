@@ -393,9 +393,9 @@ TEST_CASE("SIMD paths: one this build or CPU cannot run is refused, saying which
   for (const SimdPath path : {SimdPath::sse2, SimdPath::avx2, SimdPath::avx512}) {
     CAPTURE(to_string(path));
     if (is_available(path)) {
-      CHECK_NOTHROW(require_available(path));
+      CHECK_NOTHROW(require_available(path, "--simd"));
     } else {
-      CHECK_THROWS_WITH_AS(require_available(path), doctest::Contains("(valid here: sse2"), InputError);
+      CHECK_THROWS_WITH_AS(require_available(path, "--simd"), doctest::Contains("(valid here: sse2"), InputError);
     }
   }
 }

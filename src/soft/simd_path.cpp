@@ -10,6 +10,17 @@ namespace {
 
 std::atomic<int> chosen_default{-1};  ///< a SimdPath, or −1 for the widest
 
+constexpr SimdPath all_paths[] = {SimdPath::sse2, SimdPath::avx2, SimdPath::avx512};
+
+// The wide kernels rely on `flatten` to compile everything they call for their instruction
+// set. An unoptimised build inlines nothing, so their wide vectors would be passed to
+// helpers compiled for the baseline, which crashes: such builds run SSE2 only.
+#ifdef __OPTIMIZE__
+constexpr bool wide_kernels_built = true;
+#else
+constexpr bool wide_kernels_built = false;
+#endif
+
 }  // namespace
 
 std::string_view to_string(SimdPath path) {
@@ -22,24 +33,11 @@ std::string_view to_string(SimdPath path) {
 }
 
 SimdPath parse_simd_path(std::string_view text, std::string_view what) {
-  for (const SimdPath path : {SimdPath::sse2, SimdPath::avx2, SimdPath::avx512}) {
+  for (const SimdPath path : all_paths) {
     if (text == to_string(path)) return path;
   }
   throw InputError(std::string(what) + " '" + std::string(text) + "': must be sse2, avx2 or avx512");
 }
-
-namespace {
-
-// The wide kernels rely on `flatten` to compile everything they call for their instruction
-// set. An unoptimised build inlines nothing, so their wide vectors would be passed to
-// helpers compiled for the baseline, which crashes: such builds run SSE2 only.
-#ifdef __OPTIMIZE__
-constexpr bool wide_kernels_built = true;
-#else
-constexpr bool wide_kernels_built = false;
-#endif
-
-}  // namespace
 
 bool is_available(SimdPath path) {
   if (path != SimdPath::sse2 && !wide_kernels_built) return false;
@@ -63,13 +61,15 @@ SimdPath default_simd_path() {
   return chosen < 0 ? widest_simd_path() : static_cast<SimdPath>(chosen);
 }
 
-void require_available(SimdPath path) {
+void require_available(SimdPath path, std::string_view what) {
   if (is_available(path)) return;
-  std::string message = "simd path ";
+  std::string message(what);
+  message += " '";
   message += to_string(path);
+  message += '\'';
   message += wide_kernels_built ? ": this CPU cannot run it" : ": an unoptimised build runs sse2 only";
   message += " (valid here:";
-  for (const SimdPath other : {SimdPath::sse2, SimdPath::avx2, SimdPath::avx512}) {
+  for (const SimdPath other : all_paths) {
     if (!is_available(other)) continue;
     message += ' ';
     message += to_string(other);
@@ -78,8 +78,8 @@ void require_available(SimdPath path) {
   throw InputError(message);
 }
 
-void set_default_simd_path(SimdPath path) {
-  require_available(path);
+void set_default_simd_path(SimdPath path, std::string_view what) {
+  require_available(path, what);
   chosen_default.store(static_cast<int>(path));
 }
 

@@ -136,7 +136,7 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
       dt_s_(choose_time_step_s(scenario)),
       neighbours_(make_grid(scenario, initial, options.skin_fraction * 2.0 * initial.max_radius_m()),
                   options.skin_fraction * 2.0 * initial.max_radius_m()) {
-  require_available(simd_path_);
+  require_available(simd_path_, "the soft engine's simd_path");
   if (initial.size() > NeighbourList::max_spheres) {
     throw InputError("the soft engine holds at most " + std::to_string(NeighbourList::max_spheres) + " spheres");
   }

@@ -4,7 +4,6 @@
 /// AVX-512 with 8. Every lane performs the scalar code's IEEE operations in its order, so
 /// all paths give the same bits.
 
-#include <optional>
 #include <string_view>
 
 namespace pdamp::soft {
@@ -17,15 +16,16 @@ SimdPath parse_simd_path(std::string_view text, std::string_view what);
 /// Whether this build, this CPU and its operating system can run the path (an unoptimised
 /// build runs sse2 only).
 bool is_available(SimdPath path);
-/// The widest path this CPU runs.
+/// The widest path is_available says this build and CPU run.
 SimdPath widest_simd_path();
 
 /// The path engines take unless their options say otherwise: the widest, or what
 /// set_default_simd_path chose for the process (as omp_set_num_threads does for threads).
 SimdPath default_simd_path();
-/// Throws InputError, saying why and what is valid, unless is_available(path).
-void require_available(SimdPath path);
+/// Throws InputError naming `what` (the option that asked for it), saying why and what is
+/// valid, unless is_available(path).
+void require_available(SimdPath path, std::string_view what);
 /// Throws as require_available does.
-void set_default_simd_path(SimdPath path);
+void set_default_simd_path(SimdPath path, std::string_view what);
 
 }  // namespace pdamp::soft

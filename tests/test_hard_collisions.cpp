@@ -44,6 +44,25 @@ TEST_CASE("Walton: head-on frictionless impact of two spheres") {
   CHECK(walton_collision(-u_n * n, n, -u_n, k, law(e, 0.5, 0.35)).impulse_N_s.norm() == 0.0);
 }
 
+TEST_CASE("Walton: an oblique frictionless impact is normal, the limit of the sliding law as mu -> 0") {
+  const double m = 3e-6, e = 0.6, u_n = 0.7;
+  const Eigen::Vector3d n = Eigen::Vector3d(2, -1, 2) / 3.0;
+  const Eigen::Vector3d u = u_n * n + Eigen::Vector3d(0.3, 0.4, -0.1);  // slip of either sign along n's plane
+  // A sphere on a sphere, and a sphere on a light host (whose vertical mobility couples
+  // the tangential direction into the normal one).
+  for (const Mobility& k : {sphere_mobility(m) + sphere_mobility(2 * m), sphere_mobility(m) + Mobility{0, 0, 1 / (5 * m)}}) {
+    const CollisionOutcome out = walton_collision(u, n, u_n, k, law(e, 0.0, 0.35));
+    CHECK(!out.sticking);
+    CHECK(out.impulse_N_s.cross(n).norm() <= 1e-15 * out.impulse_N_s.norm());
+    // Normal restitution holds: n·(u + K P) = −e u_n.
+    CHECK(n.dot(u + apply_mobility(k, n, out.impulse_N_s)) == doctest::Approx(-e * u_n).epsilon(1e-13));
+    const CollisionOutcome nearly = walton_collision(u, n, u_n, k, law(e, 1e-9, 0.35));
+    CHECK((out.impulse_N_s - nearly.impulse_N_s).norm() <= 1e-8 * out.impulse_N_s.norm());
+    CHECK(std::abs(out.friction_J) <= 1e-15 * out.impact_J);
+    CHECK(out.impact_J == doctest::Approx(total_loss(out, u, n, k)).epsilon(1e-13));
+  }
+}
+
 TEST_CASE("Walton: a sticking oblique impact reverses the contact slip by beta0") {
   const double m = 3e-6, e = 0.8, beta0 = 0.35, u_n = 0.5, u_t = 0.2;
   const Eigen::Vector3d n = -Eigen::Vector3d::UnitZ();  // sphere falling on a fixed floor

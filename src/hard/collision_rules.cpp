@@ -33,6 +33,34 @@ double normal_mobility(const Mobility& m, const Eigen::Vector3d& n, const Eigen:
   return m.normal_1_kg * n.dot(x) + m.host_1_kg * n.z() * x.z();
 }
 
+/// Sliding at once, with no tangential impulse: λ from n·(u + K p) = −e_n u_n alone (the
+/// sliding branch below with μ = 0, to the bit, without solving for a sticking impulse
+/// that it would only drop).
+Eigen::Vector3d frictionless_impulse(const Mobility& m, const Eigen::Vector3d& n, double u_n, double restitution) {
+  return -((1.0 + restitution) * u_n / normal_mobility(m, n, n)) * n;
+}
+
+Eigen::Vector3d frictional_impulse(const Mobility& m, const Eigen::Vector3d& n, double u_n, const Eigen::Vector3d& u_t,
+                                   const HardContactLaw& law, bool& sticking) {
+  const double restitution = law.en;
+  const Eigen::Vector3d target_change = -(1.0 + restitution) * u_n * n - (1.0 + law.beta0) * u_t;
+  Eigen::Vector3d p = solve_mobility(m, n, target_change);
+  const double normal_impulse = -p.dot(n);
+  const Eigen::Vector3d p_t = p + normal_impulse * n;
+  const double p_t_norm = p_t.norm();
+  sticking = p_t_norm <= law.mu * normal_impulse;
+  if (sticking) return p;
+  // Sliding: tangential impulse μλ along the sticking impulse's tangential direction,
+  // λ from n·(u + K p) = −e_n u_n.
+  const Eigen::Vector3d t_hat = p_t / p_t_norm;
+  const double denominator = normal_mobility(m, n, n) - law.mu * normal_mobility(m, n, t_hat);
+  // Positive unless a light host couples friction into the normal direction more than
+  // the spheres resist it; then the sticking impulse stands.
+  if (!(denominator > 0.0)) return p;
+  const double lambda = (1.0 + restitution) * u_n / denominator;
+  return -lambda * n + law.mu * lambda * t_hat;
+}
+
 }  // namespace
 
 CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double u_n,
@@ -41,25 +69,9 @@ CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3
   CollisionOutcome out;
   if (!(u_n > 0.0)) return out;
   const Eigen::Vector3d u_t = u - u.dot(n) * n;
-  const Eigen::Vector3d target_change = -(1.0 + restitution) * u_n * n - (1.0 + law.beta0) * u_t;
-  Eigen::Vector3d p = solve_mobility(mobility, n, target_change);
-  const double normal_impulse = -p.dot(n);
-  const Eigen::Vector3d p_t = p + normal_impulse * n;
-  const double p_t_norm = p_t.norm();
-  out.sticking = p_t_norm <= law.mu * normal_impulse;
-  if (!out.sticking) {
-    // Sliding: tangential impulse μλ along the sticking impulse's tangential direction,
-    // λ from n·(u + K p) = −e_n u_n.
-    const Eigen::Vector3d t_hat = p_t / p_t_norm;
-    const double denominator = normal_mobility(mobility, n, n) - law.mu * normal_mobility(mobility, n, t_hat);
-    // Positive unless a light host couples friction into the normal direction more than
-    // the spheres resist it; then the sticking impulse stands.
-    if (denominator > 0.0) {
-      const double lambda = (1.0 + restitution) * u_n / denominator;
-      p = -lambda * n + law.mu * lambda * t_hat;
-    }
-  }
-  out.impulse_N_s = p;
+  out.impulse_N_s = law.mu == 0.0 ? frictionless_impulse(mobility, n, u_n, restitution)
+                                  : frictional_impulse(mobility, n, u_n, u_t, law, out.sticking);
+  const Eigen::Vector3d& p = out.impulse_N_s;
   const Eigen::Vector3d mean_velocity = u_t + u_n * n + 0.5 * apply_mobility(mobility, n, p);
   const double p_n = p.dot(n);
   out.impact_J = -p_n * n.dot(mean_velocity);

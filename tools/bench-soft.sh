@@ -23,15 +23,7 @@ while (($#)); do
 done
 "$root/tools/setup.sh"
 "$root/tools/build.sh" release >/dev/null
-pdamp="$root/build/release/src/pdamp"
-mkdir -p "$root/build/bench"
-db="$root/build/bench/bench.sqlite"
-period=$(awk 'BEGIN { printf "%.10f", 1 / 30.8 }')
-
-# Runs pdamp quietly and prints "run_id".
-run() { "$pdamp" run --db "$db" "$@" 2>/dev/null | sed -n 's/^run \([0-9]*\):.*/\1/p'; }
-stat() { sqlite3 "$db" "SELECT value FROM run_statistics WHERE run_id = $1 AND name = '$2'"; }
-wall() { sqlite3 "$db" "SELECT wall_time_s FROM runs WHERE run_id = $1"; }
+source "$root/tools/bench-lib.sh"
 
 baseline=$(run --scenario "$root/data/scenarios/table2.ini" --model soft --set particles.count=0 --duration 0.01)
 baseline_kB=$(stat "$baseline" peak_memory_kB)
@@ -42,14 +34,8 @@ report() {  # name particles threads steps wall_s peak_kB
     printf "%-34s %8d %7d %12d %10.3f %16.3e %12.0f\n", name, n, t, steps, wall, n * steps / wall, (kB - base) * 1024 / n }'
 }
 
-# The shaken bed at each size: particles, cavity diameter (the same bed height).
+# The shaken bed at each size: particles, cavity diameter.
 sizes=("1246 0.010" "4984 0.020" "19936 0.040")
-shaken() {  # particles diameter [pdamp run options]
-  local n=$1 diameter=$2
-  shift 2
-  run --scenario "$root/data/scenarios/bench/table2_shaken.ini" --model soft --set "particles.count=$n" \
-    --set "cavity.diameter_m=$diameter" "$@"
-}
 run --scenario "$root/data/scenarios/table2.ini" --model soft --duration 0.0005 >/dev/null
 for size in "${sizes[@]}"; do shaken $size --duration 0.0005 >/dev/null; done
 
@@ -59,10 +45,7 @@ for threads in $thread_counts; do
 
   for size in "${sizes[@]}"; do
     set -- $size
-    warmup=$(shaken "$1" "$2" --threads "$threads" --duration "$period")
-    full=$(shaken "$1" "$2" --threads "$threads" --duration "$(awk -v p="$period" 'BEGIN { printf "%.10f", 4 * p }')")
-    steps=$(($(stat "$full" steps) - $(stat "$warmup" steps)))
-    seconds=$(awk -v a="$(wall "$full")" -v b="$(wall "$warmup")" 'BEGIN { print a - b }')
-    report "shaken 5 mm 30.8 Hz, periods 2-4" "$1" "$threads" "$steps" "$seconds" "$(stat "$full" peak_memory_kB)"
+    read -r steps seconds peak_kB < <(shaken_periods_2_to_4 "$1" "$2" "$threads")
+    report "shaken 5 mm 30.8 Hz, periods 2-4" "$1" "$threads" "$steps" "$seconds" "$peak_kB"
   done
 done

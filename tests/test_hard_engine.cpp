@@ -20,14 +20,6 @@ using hard::HardEngine;
 
 namespace {
 
-std::int64_t statistic(const Engine& engine, const std::string& name) {
-  for (const auto& [key, value] : engine.statistics()) {
-    if (key == name) return value;
-  }
-  FAIL("no statistic " << name);
-  return 0;
-}
-
 /// A scenario whose walls do not move: a prescribed host of zero amplitude.
 Scenario fixed_walls(const std::string& text) {
   Scenario s = test::scenario_from(text + "\n[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 1\n");
@@ -139,8 +131,8 @@ TEST_CASE("elastic frictionless gas in a fixed cavity: energy conserved, velocit
   const double sigma = std::sqrt(second);
   const auto inside = std::count_if(components.begin(), components.end(), [&](double v) { return std::abs(v) < sigma; });
   CHECK(static_cast<double>(inside) / static_cast<double>(components.size()) == doctest::Approx(0.6827).epsilon(0.02));
-  CHECK(statistic(engine, "events_wall") > 0);
-  CHECK(statistic(engine, "events_cap") > 0);
+  CHECK(test::statistic(engine, "events_wall") > 0);
+  CHECK(test::statistic(engine, "events_cap") > 0);
 }
 
 TEST_CASE("vertical momentum of spheres and host is conserved by every kind of collision") {
@@ -164,9 +156,9 @@ TEST_CASE("vertical momentum of spheres and host is conserved by every kind of c
     engine.advance_to(0.002 * k);
     CHECK(std::abs(momentum() - p0) <= 1e-13 * scale);
   }
-  CHECK(statistic(engine, "events_cap") > 50);
-  CHECK(statistic(engine, "events_wall") > 50);
-  CHECK(statistic(engine, "events_sphere_sphere") > 50);
+  CHECK(test::statistic(engine, "events_cap") > 50);
+  CHECK(test::statistic(engine, "events_wall") > 50);
+  CHECK(test::statistic(engine, "events_sphere_sphere") > 50);
   CHECK(engine.observe().energy.balance_relative_error(0.0) >= 0.0);
 }
 
@@ -195,8 +187,8 @@ TEST_CASE("angular momentum about the origin is conserved by a frictional sphere
   HardEngine engine(s, p);
   const Eigen::Vector3d l0 = angular_momentum(engine.state().particles);
   engine.advance_to(0.006);  // one collision, no wall reached
-  REQUIRE(statistic(engine, "events_sphere_sphere") == 1);
-  REQUIRE(statistic(engine, "events_wall") + statistic(engine, "events_cap") == 0);
+  REQUIRE(test::statistic(engine, "events_sphere_sphere") == 1);
+  REQUIRE(test::statistic(engine, "events_wall") + test::statistic(engine, "events_cap") == 0);
   const Particles after = engine.state().particles;
   CHECK((angular_momentum(after) - l0).norm() <= 1e-15 * l0.norm());
   CHECK(engine.observe().energy.dissipated_friction_J > 0.0);
@@ -268,7 +260,7 @@ TEST_CASE("resting: a ball dropped on a floor vibrating below Gamma = 1 comes to
   const State st = engine.state();
   CHECK(st.particles.velocity_m_s(2, 0) == st.observation.host.v_m_s);
   CHECK(st.particles.position_m(2, 0) == doctest::Approx(st.observation.host.z_m + 0.001).epsilon(1e-9));
-  CHECK(statistic(engine, "bed_releases") == 0);
+  CHECK(test::statistic(engine, "bed_releases") == 0);
   const EnergyLedger e = engine.observe().energy;
   CHECK(e.balance_relative_error(HardEngine(setup.scenario, setup.ball()).observe().energy.stored_J()) <= 1e-9);
 }
@@ -277,14 +269,14 @@ TEST_CASE("resting: just above Gamma = 1 the ball lifts off the floor every cycl
   const BouncingBall above(1.2, 30.0, 0.002);
   HardEngine engine(above.scenario, above.ball());
   engine.advance_to(1.0);
-  const std::int64_t releases = statistic(engine, "bed_releases");
+  const std::int64_t releases = test::statistic(engine, "bed_releases");
   engine.advance_to(2.0);
-  CHECK(statistic(engine, "bed_releases") - releases >= 20);  // 30 cycles in that second
+  CHECK(test::statistic(engine, "bed_releases") - releases >= 20);  // 30 cycles in that second
   CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
   const BouncingBall below(0.9, 30.0, 0.002);
   HardEngine calm(below.scenario, below.ball());
   calm.advance_to(2.0);
-  CHECK(statistic(calm, "bed_releases") == 0);
+  CHECK(test::statistic(calm, "bed_releases") == 0);
   CHECK(calm.riding_count() == 1);
 }
 
@@ -375,7 +367,7 @@ TEST_CASE("a host impulse cannot drive a cap into a sphere that touches it while
     engine.advance_to(5e-6 * k);
     REQUIRE(engine.max_overlap_m() <= engine.overlap_tolerance_m());
   }
-  CHECK(statistic(engine, "events_cap") >= 2);  // B on the top cap, then the floor catches A
+  CHECK(test::statistic(engine, "events_cap") >= 2);  // B on the top cap, then the floor catches A
 }
 
 TEST_CASE("touching spheres keep their predictions through host impulses that move the walls away, and nothing overlaps") {
@@ -390,8 +382,8 @@ TEST_CASE("touching spheres keep their predictions through host impulses that mo
     engine.advance_to(2e-5 * k);
     REQUIRE(engine.max_overlap_m() <= engine.overlap_tolerance_m());
   }
-  CHECK(statistic(engine, "touching_deferrals") > 1000);
-  CHECK(statistic(engine, "touching_repredictions") > 0);  // the impulses that move walls towards them
+  CHECK(test::statistic(engine, "touching_deferrals") > 1000);
+  CHECK(test::statistic(engine, "touching_repredictions") > 0);  // the impulses that move walls towards them
   CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
 }
 
@@ -419,8 +411,8 @@ TEST_CASE("jam: a heavy sphere driven into a touching cluster in flight merges t
     engine.advance_to(1e-5 * k);
     CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
   }
-  CHECK(statistic(engine, "events_sphere_sphere") < 30000);
-  CHECK(statistic(engine, "jam_merges") > 0);
+  CHECK(test::statistic(engine, "events_sphere_sphere") < 30000);
+  CHECK(test::statistic(engine, "jam_merges") > 0);
   CHECK((momentum() - p0).norm() <= 1e-13 * p0.norm());
   CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
   CHECK(engine.observe().energy.dissipated_friction_J > 0);
@@ -460,8 +452,8 @@ TEST_CASE("jam: a cluster driven against the side wall sticks to the host instea
     CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
     CHECK(std::abs(momentum() - p0) <= 1e-13 * scale);
   }
-  CHECK(statistic(engine, "jam_stuck_to_host") > 0);
-  CHECK(statistic(engine, "events_sphere_sphere") + statistic(engine, "events_wall") < 30000);
+  CHECK(test::statistic(engine, "jam_stuck_to_host") > 0);
+  CHECK(test::statistic(engine, "events_sphere_sphere") + test::statistic(engine, "events_wall") < 30000);
   CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
   // The heavy sphere is stopped against the wedged spheres.
   const State end = engine.state();
@@ -497,6 +489,6 @@ TEST_CASE("jam: Table 4's 250 Hz bed, hit by a cap at 15 m/s, gets past the wedg
   const RunOutcome outcome = run_simulation(engine, s, discard);
   CHECK_MESSAGE(outcome.status == RunStatus::completed, outcome.message);
   CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
-  CHECK(statistic(engine, "jam_stuck_to_host") > 0);
+  CHECK(test::statistic(engine, "jam_stuck_to_host") > 0);
   CHECK(outcome.max_energy_balance_rel_err <= 1e-9);
 }

@@ -342,16 +342,18 @@ TEST_CASE("settling: the placement comes to rest on the floor and stays inside t
 }
 
 TEST_CASE("threads: one or two, the results are the same bits") {
-  // Enough spheres for the engine to share the work (SoftEngine::parallel_minimum).
   const Scenario s = load_scenario(test::scenario_file("small"),
                                    {"particles.count=600", "particles.diameter_m=0.001", "cavity.diameter_m=0.016"});
   Particles bed = place_particles(s.particles, s.cavity, s.host.z0_m);
   bed.velocity_m_s = Eigen::Matrix3Xd::Random(3, bed.size());  // collisions from the first step
   auto run_on = [&](int threads) {
     omp_set_num_threads(threads);
-    SoftEngine engine(s, bed);
+    SoftEngineOptions shared;
+    shared.parallel_minimum_spheres = 500;  // a bed this small would run on one thread by default
+    SoftEngine engine(s, bed, shared);
     engine.advance_to(1000 * engine.time_step_s());
     CHECK(engine.observe().counters.contacts > 50);
+    CHECK(test::statistic(engine, "threads_used") == threads);
     return engine.state();
   };
   const int before = omp_get_max_threads();

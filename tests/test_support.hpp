@@ -4,10 +4,12 @@
 #include <Eigen/Core>
 #include <filesystem>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 #include <unistd.h>
 #include <vector>
 
+#include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
 #include "pdamp/scenario/scenario_loader.hpp"
 
@@ -16,6 +18,14 @@ namespace pdamp::test {
 inline std::filesystem::path source_dir() { return PDAMP_SOURCE_DIR; }
 inline std::filesystem::path scenario_file(const std::string& name) {
   return source_dir() / "data" / "scenarios" / (name + ".ini");
+}
+
+/// The engine's statistic `name` (Engine::statistics); throws if it has none.
+inline std::int64_t statistic(const Engine& engine, const std::string& name) {
+  for (const auto& [key, value] : engine.statistics()) {
+    if (key == name) return value;
+  }
+  throw std::invalid_argument("no engine statistic '" + name + "'");
 }
 
 /// A scenario from inline text (every unspecified key takes its default).

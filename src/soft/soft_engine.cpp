@@ -103,7 +103,7 @@ struct SoftEngine::BuildPass {
 
 bool SoftEngine::runs_in_parallel() const {
   // Not even through a parallel region of one thread: entering one costs.
-  return sphere_count() >= parallel_minimum && omp_get_max_threads() > 1;
+  return sphere_count() >= options_.parallel_minimum_spheres && omp_get_max_threads() > 1;
 }
 
 template <class Pass>
@@ -781,7 +781,8 @@ EngineStatistics SoftEngine::statistics() const {
           {"neighbour_rebuilds", neighbours_.rebuilds()},
           {"neighbour_pairs", neighbours_.size()},
           {"max_overlap_ppm_of_radius", std::llround(max_overlap_ratio_ * 1e6)},
-          {"simd_lanes", simd_path_ == SimdPath::avx512 ? 8 : simd_path_ == SimdPath::avx2 ? 4 : 2}};
+          {"simd_lanes", simd_path_ == SimdPath::avx512 ? 8 : simd_path_ == SimdPath::avx2 ? 4 : 2},
+          {"threads_used", runs_in_parallel() ? omp_get_max_threads() : 1}};
 }
 
 std::vector<std::string> SoftEngine::warnings() const {

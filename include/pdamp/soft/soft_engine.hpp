@@ -28,6 +28,9 @@ struct SoftEngineOptions {
   double settling_drag_1_s = 0.0;
   /// Neighbour-list skin as a fraction of the largest diameter.
   double skin_fraction = 0.2;
+  /// Below this many spheres a step is too short to share between threads, which then
+  /// cost more than they save (README, "Threads"): the engine runs on one.
+  int parallel_minimum_spheres = 3000;
   /// The instruction set of the kernels (default_simd_path() if not given); the results
   /// are the same bits on every path.
   std::optional<SimdPath> simd_path;
@@ -86,8 +89,6 @@ class SoftEngine final : public Engine {
   };
   /// Spheres per chunk: fixed, so that sums are formed in the same order on any number of threads.
   static constexpr int chunk_size = NeighbourList::group_size;
-  /// Below this many spheres a step is too short to share between threads.
-  static constexpr int parallel_minimum = 512;
   int chunk_count() const { return (sphere_count() + chunk_size - 1) / chunk_size; }
   bool runs_in_parallel() const;
   int sphere_count() const { return balls_.size(); }

@@ -8,12 +8,15 @@
 #                (frame variant), pdamp again; prints each round's throughputs and the ratio
 #                of pdamp's mean around it to LIGGGHTS's. A shared machine's speed drifts by tens
 #                of per cent within minutes, so only runs this close to each other compare.
+#                SIZES defaults to 1246:10e-3 here.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 rounds=0
 while (($#)); do
   case "$1" in
-    --rounds) rounds=$2; shift ;;
+    --rounds)
+      [[ ${2:-} =~ ^[1-9][0-9]*$ ]] || { echo "--rounds '${2:-}': must be a whole number of rounds, 1 or more" >&2; exit 2; }
+      rounds=$2; shift ;;
     *) echo "usage: tools/bench-liggghts.sh [--rounds R]" >&2; exit 2 ;;
   esac
   shift
@@ -52,5 +55,6 @@ for size in ${SIZES:-1246:10e-3}; do
     printf '%8d %6d %14s %14s %14s %7s\n' "$n" "$r" "$before" "$liggghts" "$after" "$ratio"
   done
   printf '%s\n' "${ratios[@]}" | sort -n |
-    awk -v n="$n" '{ a[NR] = $1 } END { printf "%8d ratio pdamp/LIGGGHTS: min %s, median %s, max %s (%d rounds)\n", n, a[1], a[int((NR + 1) / 2)], a[NR], NR }'
+    awk -v n="$n" '{ a[NR] = $1 } END {
+      printf "%8d ratio pdamp/LIGGGHTS: min %s, median %.2f, max %s (%d rounds)\n", n, a[1], (a[int((NR + 1) / 2)] + a[int(NR / 2) + 1]) / 2, a[NR], NR }'
 done

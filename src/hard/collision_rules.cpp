@@ -65,11 +65,10 @@ Eigen::Vector3d frictional_impulse(const Mobility& m, const Eigen::Vector3d& n, 
 
 CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3d& n, double u_n,
                                   const Mobility& mobility, const HardContactLaw& law) {
-  const double restitution = law.en;
   CollisionOutcome out;
   if (!(u_n > 0.0)) return out;
   const Eigen::Vector3d u_t = u - u.dot(n) * n;
-  out.impulse_N_s = law.mu == 0.0 ? frictionless_impulse(mobility, n, u_n, restitution)
+  out.impulse_N_s = law.mu == 0.0 ? frictionless_impulse(mobility, n, u_n, law.en)
                                   : frictional_impulse(mobility, n, u_n, u_t, law, out.sticking);
   const Eigen::Vector3d& p = out.impulse_N_s;
   const Eigen::Vector3d mean_velocity = u_t + u_n * n + 0.5 * apply_mobility(mobility, n, p);

@@ -7,6 +7,7 @@
 #   2. The paper's Table 1 damper for 1.5 s on the hard model (wall time of the run
 #      itself; the shared settled bed is made once and kept in build/bench/bench.sqlite).
 # Usage: tools/bench-hard.sh [--quick]   (--quick: N = 1,000 and 10,000, Table 1 for 0.3 s)
+# Every timed run is on one core (PDAMP_BENCH_CORE, see tools/bench-lib.sh).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 sizes="1000 10000 100000"
@@ -14,16 +15,16 @@ table1_duration=1.5
 if [ "${1:-}" = --quick ]; then sizes="1000 10000"; table1_duration=0.3; fi
 "$root/tools/setup.sh"
 "$root/tools/build.sh" release >/dev/null
+source "$root/tools/bench-lib.sh"
 bench="$root/build/release/tools/bench/pdamp_bench"
 for host in fixed free; do
   for n in $sizes; do
-    "$bench" --particles "$n" --host "$host"
+    on_bench_core "$bench" --particles "$n" --host "$host"
   done
 done
-mkdir -p "$root/build/bench"
-db="$root/build/bench/bench.sqlite"
-id=$("$root/build/release/src/pdamp" run --scenario "$root/data/scenarios/table1.ini" --model hard --db "$db" \
-  --duration "$table1_duration" 2>/dev/null | sed -n 's/^run \([0-9]*\):.*/\1/p')
+pin_for_threads 1
+id=$(run --scenario "$root/data/scenarios/table1.ini" --model hard --duration "$table1_duration")
+pin=()
 sqlite3 "$db" "SELECT 'table1 hard ' || duration_s || ' s: wall ' || round(wall_time_s, 2) || ' s, balance error ' ||
   energy_balance_rel_err FROM runs WHERE run_id = $id"
 sqlite3 "$db" "SELECT name || ' ' || value FROM run_statistics WHERE run_id = $id AND name LIKE 'events_%'"

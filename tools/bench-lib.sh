@@ -6,8 +6,20 @@ mkdir -p "$root/build/bench"
 db="$root/build/bench/bench.sqlite"
 period=$(awk 'BEGIN { printf "%.10f", 1 / 30.8 }')
 
+# Timed runs on one thread go to one core: on a shared virtual machine the cores' speeds
+# can differ by tens of per cent, and which one is slow changes within minutes (on the
+# development machine one core ran the hard gas at 1.2e6 collisions/s and the other at
+# 1.65e6, then the other way round). A run the scheduler moves between them measures a
+# mix; runs one after the other on one core compare. PDAMP_BENCH_CORE picks the core
+# (default: the last one).
+bench_core=${PDAMP_BENCH_CORE:-$(($(nproc) - 1))}
+on_bench_core() { taskset -c "$bench_core" "$@"; }
+pin=()  # the prefix of pdamp's runs: (on_bench_core) while one-thread runs are timed
+# Sets pin for runs on this many threads.
+pin_for_threads() { if [ "$1" = 1 ]; then pin=(on_bench_core); else pin=(); fi; }
+
 # Runs pdamp quietly and prints "run_id".
-run() { "$pdamp" run --db "$db" "$@" 2>/dev/null | sed -n 's/^run \([0-9]*\):.*/\1/p'; }
+run() { "${pin[@]}" "$pdamp" run --db "$db" "$@" 2>/dev/null | sed -n 's/^run \([0-9]*\):.*/\1/p'; }
 stat() { sqlite3 "$db" "SELECT value FROM run_statistics WHERE run_id = $1 AND name = '$2'"; }
 wall() { sqlite3 "$db" "SELECT wall_time_s FROM runs WHERE run_id = $1"; }
 
@@ -23,7 +35,9 @@ shaken() {
 # Arguments: particles, cavity diameter, threads.
 shaken_periods_2_to_4() {
   local warmup full
+  pin_for_threads "$3"
   warmup=$(shaken "$1" "$2" --threads "$3" --duration "$period")
   full=$(shaken "$1" "$2" --threads "$3" --duration "$(awk -v p="$period" 'BEGIN { printf "%.10f", 4 * p }')")
+  pin=()
   echo "$(($(stat "$full" steps) - $(stat "$warmup" steps))) $(awk -v a="$(wall "$full")" -v b="$(wall "$warmup")" 'BEGIN { print a - b }') $(stat "$full" peak_memory_kB)"
 }

@@ -8,6 +8,7 @@
 #                (frame variant), pdamp again; prints each round's throughputs and the ratio
 #                of pdamp's mean around it to LIGGGHTS's. A shared machine's speed drifts by tens
 #                of per cent within minutes, so only runs this close to each other compare.
+#                Every timed run is on one core (PDAMP_BENCH_CORE, see tools/bench-lib.sh).
 #                SIZES defaults to 1246:10e-3 here.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -31,7 +32,7 @@ work="$root/build/bench/liggghts"
 rm -rf "$work" && mkdir -p "$work" && cp "$root"/tools/bench/liggghts/* "$work"/
 echo "LIGGGHTS at pdamp's time step dt = $dt s"
 if ((rounds == 0)); then
-  VALIDATE=${VALIDATE:-0} DT="$dt" "$work/run_bench.sh"
+  VALIDATE=${VALIDATE:-0} DT="$dt" on_bench_core "$work/run_bench.sh"
   exit 0
 fi
 
@@ -47,7 +48,7 @@ for size in ${SIZES:-1246:10e-3}; do
   ratios=()
   for ((r = 1; r <= rounds; ++r)); do
     before=$(pdamp_throughput "$n" "$diameter")
-    SIZES="$size" VARIANTS=frame VALIDATE=0 DT="$dt" "$work/run_bench.sh" >/dev/null
+    SIZES="$size" VARIANTS=frame VALIDATE=0 DT="$dt" on_bench_core "$work/run_bench.sh" >/dev/null
     liggghts=$(awk -F'\t' 'END { print $6 }' "$work/runs/results.tsv")
     after=$(pdamp_throughput "$n" "$diameter")
     ratio=$(awk -v a="$before" -v b="$after" -v l="$liggghts" 'BEGIN { printf "%.2f", (a + b) / 2 / l }')

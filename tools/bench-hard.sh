@@ -22,9 +22,7 @@ for host in fixed free; do
     on_bench_core "$bench" --particles "$n" --host "$host"
   done
 done
-pin_for_threads 1
-id=$(run --scenario "$root/data/scenarios/table1.ini" --model hard --duration "$table1_duration")
-pin=()
+id=$(pinned_if_one_thread 1 run --scenario "$root/data/scenarios/table1.ini" --model hard --duration "$table1_duration")
 sqlite3 "$db" "SELECT 'table1 hard ' || duration_s || ' s: wall ' || round(wall_time_s, 2) || ' s, balance error ' ||
   energy_balance_rel_err FROM runs WHERE run_id = $id"
 sqlite3 "$db" "SELECT name || ' ' || value FROM run_statistics WHERE run_id = $id AND name LIKE 'events_%'"

@@ -14,9 +14,14 @@ period=$(awk 'BEGIN { printf "%.10f", 1 / 30.8 }')
 # (default: the last one).
 bench_core=${PDAMP_BENCH_CORE:-$(($(nproc) - 1))}
 on_bench_core() { taskset -c "$bench_core" "$@"; }
-pin=()  # the prefix of pdamp's runs: (on_bench_core) while one-thread runs are timed
-# Sets pin for runs on this many threads.
-pin_for_threads() { if [ "$1" = 1 ]; then pin=(on_bench_core); else pin=(); fi; }
+pin=()  # the prefix of pdamp's runs (see pinned_if_one_thread)
+# Runs `threads command...` with pdamp's runs in it on the bench core if threads is 1.
+pinned_if_one_thread() {
+  local threads=$1
+  shift
+  if [ "$threads" = 1 ]; then local pin=(on_bench_core); fi
+  "$@"
+}
 
 # Runs pdamp quietly and prints "run_id".
 run() { "${pin[@]}" "$pdamp" run --db "$db" "$@" 2>/dev/null | sed -n 's/^run \([0-9]*\):.*/\1/p'; }
@@ -35,9 +40,8 @@ shaken() {
 # Arguments: particles, cavity diameter, threads.
 shaken_periods_2_to_4() {
   local warmup full
-  pin_for_threads "$3"
-  warmup=$(shaken "$1" "$2" --threads "$3" --duration "$period")
-  full=$(shaken "$1" "$2" --threads "$3" --duration "$(awk -v p="$period" 'BEGIN { printf "%.10f", 4 * p }')")
-  pin=()
+  warmup=$(pinned_if_one_thread "$3" shaken "$1" "$2" --threads "$3" --duration "$period")
+  full=$(pinned_if_one_thread "$3" shaken "$1" "$2" --threads "$3" \
+    --duration "$(awk -v p="$period" 'BEGIN { printf "%.10f", 4 * p }')")
   echo "$(($(stat "$full" steps) - $(stat "$warmup" steps))) $(awk -v a="$(wall "$full")" -v b="$(wall "$warmup")" 'BEGIN { print a - b }') $(stat "$full" peak_memory_kB)"
 }

@@ -40,9 +40,8 @@ run --scenario "$root/data/scenarios/table2.ini" --model soft --duration 0.0005 
 for size in "${sizes[@]}"; do shaken $size --duration 0.0005 >/dev/null; done
 
 for threads in $thread_counts; do
-  pin_for_threads "$threads"
-  id=$(run --scenario "$root/data/scenarios/table2.ini" --model soft --threads "$threads" --duration "$table2_duration")
-  pin=()
+  id=$(pinned_if_one_thread "$threads" run --scenario "$root/data/scenarios/table2.ini" --model soft \
+    --threads "$threads" --duration "$table2_duration")
   report "table2 free decay ${table2_duration} s" 1246 "$threads" "$(stat "$id" steps)" "$(wall "$id")" "$(stat "$id" peak_memory_kB)"
 
   for size in "${sizes[@]}"; do

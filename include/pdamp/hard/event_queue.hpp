@@ -28,7 +28,6 @@
 #include <boost/heap/d_ary_heap.hpp>
 #include <cstdint>
 #include <limits>
-#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -195,12 +194,21 @@ class EventQueue {
   }
 
   // The calendar.
-  /// Bucket n holds the owners whose earliest event has floor((t − origin) / width) = n.
-  double bucket_of(double t_s) const { return std::floor((t_s - origin_s_) / width_s_); }
+  /// Bucket n holds the owners whose earliest event has (t − origin) · (1 / width),
+  /// truncated, = n (no event is earlier than the origin, the last refile's time); events
+  /// too far ahead to count, or with no width yet, go to `far_bucket`. A product and a
+  /// truncation, not a quotient and a floor: this sits in the dependency chain of every
+  /// entry, and, monotonic in t like the quotient, it keeps the order of events the same.
+  std::int64_t bucket_of(double t_s) const {
+    const double scaled = (t_s - origin_s_) * buckets_per_s_;
+    return scaled < static_cast<double>(far_bucket) ? static_cast<std::int64_t>(scaled) : far_bucket;
+  }
+  static constexpr std::int64_t far_bucket = std::int64_t{1} << 60;
   /// The slot of a bucket within reach (their number is a power of two).
-  std::uint32_t slot_of(double bucket) const {
+  std::uint32_t slot_of(std::int64_t bucket) const {
     return static_cast<std::uint32_t>(static_cast<std::uint64_t>(bucket) & (buckets_.size() - 1));
   }
+  std::int64_t reach() const { return static_cast<std::int64_t>(buckets_.size()); }
   Entry entry_of(int owner) const {
     const Keyed& k = keyed_[owner];
     return {k.t_s, k.tie, static_cast<std::uint32_t>(owner), k.version};
@@ -209,11 +217,11 @@ class EventQueue {
   /// bucket's list or, beyond the calendar's reach, the other heap.
   void enter(int owner) {
     Keyed& k = keyed_[owner];
-    const double n = bucket_of(k.t_s);
+    const std::int64_t n = bucket_of(k.t_s);
     if (n <= current_bucket_) {
       k.place = Place::current;
       current_.push(entry_of(owner));
-    } else if (n < current_bucket_ + static_cast<double>(buckets_.size())) {
+    } else if (n < current_bucket_ + reach()) {
       k.place = Place::bucket;
       k.slot = slot_of(n);
       k.previous = none;
@@ -238,14 +246,13 @@ class EventQueue {
   }
   /// Makes the next bucket with entries current; false if there are none.
   bool next_bucket() {
-    const double reach = static_cast<double>(buckets_.size());
     for (std::size_t step = 0; step < buckets_.size(); ++step) {
       ++current_bucket_;
       // Owners beyond the calendar's reach come within it as it moves on.
       for (; !beyond_.empty(); beyond_.pop()) {
         const Entry& e = beyond_.top();
         if (!is_keyed(e)) continue;
-        if (bucket_of(e.t_s) >= current_bucket_ + reach) break;
+        if (bucket_of(e.t_s) >= current_bucket_ + reach()) break;
         ++keyed_[e.owner].version;
         enter(static_cast<int>(e.owner));
       }
@@ -261,9 +268,8 @@ class EventQueue {
       if (!current_.empty()) return true;
     }
     // A whole calendar without entries: the buckets are too narrow for what comes next.
-    // The calendar starts again at the earliest entry beyond it (bucket numbers stay
-    // small, so counting them in doubles stays exact), with buckets at least four times
-    // as wide as the gap just crossed.
+    // The calendar starts again at the earliest entry beyond it, with buckets at least
+    // four times as wide as the gap just crossed.
     while (!beyond_.empty() && !is_keyed(beyond_.top())) beyond_.pop();
     if (beyond_.empty()) return false;
     const double t_next_s = beyond_.top().t_s;
@@ -295,7 +301,8 @@ class EventQueue {
     beyond_.clear();
     origin_s_ = t_s;
     width_s_ = width_s;
-    current_bucket_ = 0.0;
+    buckets_per_s_ = 1.0 / width_s;
+    current_bucket_ = 0;
     for (const int owner : owners) enter(owner);
   }
 
@@ -308,7 +315,8 @@ class EventQueue {
   Heap beyond_;   ///< entries past the calendar's last bucket
   double origin_s_ = 0.0;
   double width_s_ = std::numeric_limits<double>::infinity();  ///< until events have been timed, one bucket holds all
-  double current_bucket_ = 0.0;
+  double buckets_per_s_ = 0.0;                                ///< 1 / width_s_
+  std::int64_t current_bucket_ = 0;
   std::int64_t pops_ = 0;
   double t_first_pop_s_ = 0.0;
   double t_last_pop_s_ = 0.0;

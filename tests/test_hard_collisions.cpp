@@ -137,6 +137,35 @@ TEST_CASE("Walton: the loss splits exactly into impact and friction and is never
   }
 }
 
+TEST_CASE("face times: the division for unaccelerated lanes is time_to_close to the bit (where rate² does not underflow)") {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const std::array<double, 6> special{0.0, -0.0, 1e-300, -1e-300, 1e-18, -1e-18};
+  for (int trial = 0; trial < 20000; ++trial) {
+    const auto pick = [&](double scale) { return trial % 7 == 0 ? special[(trial / 7 + static_cast<int>(3 * u(rng) + 3)) % 6] : scale * u(rng); };
+    const Lanes2 lower{pick(1e-3), pick(1e-3)}, upper{pick(1e-3), pick(1e-3)}, rate{pick(2.0), pick(2.0)};
+    for (const Lanes2 accel : {Lanes2{0.0, 0.0}, Lanes2{-0.0, 0.0}, Lanes2{0.0, -9.81}, Lanes2{-9.81, 3.0}}) {
+      const FaceTimes faces = time_to_faces(lower, upper, rate, accel);
+      const Lanes2 to_lower = time_to_close(lower, rate, accel), to_upper = time_to_close(upper, -rate, -accel);
+      for (int lane = 0; lane < 2; ++lane) {
+        CAPTURE(trial);
+        CAPTURE(lane);
+        if (accel[0] == 0.0 && accel[1] == 0.0 && std::abs(rate[lane]) < 1e-150) {
+          // rate² underflows: time_to_close's root loses |rate| and doubles the time; the
+          // division gives the right one.
+          const double gap = rate[lane] < 0.0 ? lower[lane] : upper[lane];
+          const double exact = std::max(gap, 0.0) / std::abs(rate[lane]);
+          CHECK(faces.to_lower[lane] == (rate[lane] < 0.0 ? exact : never));
+          CHECK(faces.to_upper[lane] == (rate[lane] > 0.0 ? exact : never));
+          continue;
+        }
+        CHECK(std::bit_cast<std::uint64_t>(faces.to_lower[lane]) == std::bit_cast<std::uint64_t>(to_lower[lane]));
+        CHECK(std::bit_cast<std::uint64_t>(faces.to_upper[lane]) == std::bit_cast<std::uint64_t>(to_upper[lane]));
+      }
+    }
+  }
+}
+
 TEST_CASE("straight-line and quadratic event times") {
   CHECK(time_to_close(1.0, -2.0, 0.0) == doctest::Approx(0.5));
   CHECK(time_to_close(1.0, 0.0, -2.0) == doctest::Approx(1.0));

@@ -281,11 +281,10 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   // guard on the host (see below); a cell at the grid's side has no face there.
   const HostState host = host_now();
   const double envelope = host_speed_envelope_m_s_;
-  const Lanes2 to_lower_xy = time_to_close(Lanes2{x.x() - grid_.x_lower_m(c.ix), x.y() - grid_.x_lower_m(c.iy)},
-                                           Lanes2{v.x(), v.y()}, Lanes2{g.x(), g.y()});
-  const Lanes2 to_upper_xy =
-      time_to_close(Lanes2{grid_.x_lower_m(c.ix + 1) - x.x(), grid_.x_lower_m(c.iy + 1) - x.y()},
-                    Lanes2{-v.x(), -v.y()}, Lanes2{-g.x(), -g.y()});
+  const FaceTimes xy = time_to_faces(Lanes2{x.x() - grid_.x_lower_m(c.ix), x.y() - grid_.x_lower_m(c.iy)},
+                                     Lanes2{grid_.x_lower_m(c.ix + 1) - x.x(), grid_.x_lower_m(c.iy + 1) - x.y()},
+                                     Lanes2{v.x(), v.y()}, Lanes2{g.x(), g.y()});
+  const Lanes2 &to_lower_xy = xy.to_lower, &to_upper_xy = xy.to_upper;
   const Lanes2 to_lower_z =
       time_to_close(Lanes2{x.z() - grid_.z_lower_m(c.iz), x.z() - r - host.z_m - bed_depth_bound_m_},
                     Lanes2{v.z(), v.z() - envelope}, Lanes2{g.z(), g.z()});

@@ -43,27 +43,10 @@ Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, 
   return earliest_contact(gap, t0, t1, curvature, tolerance_m, min_closing_rate_m_s);
 }
 
-Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0, double t1,
-                           double tolerance_m) {
-  const Eigen::Vector2d g_xy = g.head<2>();
-  if (g_xy.squaredNorm() == 0.0) {
-    // Straight line in x, y: |p + v s|² = reach², p inside.
-    const Eigen::Vector2d p = flight.position_at(t0, g).head<2>(), v = flight.v0_m_s.head<2>();
-    const double a = v.squaredNorm(), b = p.dot(v), c = p.squaredNorm() - reach_m * reach_m;
-    if (a == 0.0) return {t1, false};
-    const double root = std::sqrt(std::max(b * b - a * c, 0.0));
-    const double closing = min_approach_speed_m_s * reach_m;  // p·v of the slowest approach that counts
-    double s;
-    if (c >= 0) {
-      // Touching: now if moving out, when it comes back if moving in, and if sliding
-      // along the wall when p·v = b + a s grows past the threshold.
-      s = b > closing ? 0.0 : b < 0 ? -2.0 * b / a : (closing - b) / a;
-    } else {
-      s = b > 0 ? -c / (b + root) : (root - b) / a;
-    }
-    return t0 + s < t1 ? Approach{t0 + s, true} : Approach{t1, false};
-  }
+Approach side_wall_contact_curved(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0,
+                                  double t1, double tolerance_m) {
   // A parabola in x, y: f = reach² − |p|², |f''| = 2 |v|² + 2 p·g ≤ 2 (V² + reach |g_xy|).
+  const Eigen::Vector2d g_xy = g.head<2>();
   const double speed = flight.velocity_at(t0, g).head<2>().norm() + g_xy.norm() * (t1 - t0);
   auto gap = [&](double t) {
     const Eigen::Vector2d p = flight.position_at(t, g).head<2>(), v = flight.velocity_at(t, g).head<2>();

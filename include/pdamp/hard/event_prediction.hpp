@@ -220,10 +220,32 @@ Approach rider_contact(const Ballistic& flight, const Eigen::Vector3d& rider_m, 
                        const HostTrajectory& host, const HostState& host_at_t0, const Eigen::Vector3d& g, double t0,
                        double t1, double tolerance_m, double min_closing_rate_m_s = min_approach_speed_m_s);
 
+/// side_wall_contact where gravity has a horizontal part: a quartic, by conservative advancement.
+Approach side_wall_contact_curved(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0,
+                                  double t1, double tolerance_m);
+
 /// The first contact with the side wall (the centre reaching distance `reach_m` = R − r
-/// from the axis) on [t0, t1].
-Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0, double t1,
-                           double tolerance_m);
+/// from the axis) on [t0, t1]. Inline: under vertical gravity, the case of every
+/// prediction near the wall, it is a quadratic root.
+inline Approach side_wall_contact(const Ballistic& flight, double reach_m, const Eigen::Vector3d& g, double t0,
+                                  double t1, double tolerance_m) {
+  if (g.head<2>().squaredNorm() != 0.0) return side_wall_contact_curved(flight, reach_m, g, t0, t1, tolerance_m);
+  // Straight line in x, y: |p + v s|² = reach², p inside.
+  const Eigen::Vector2d p = flight.position_at(t0, g).head<2>(), v = flight.v0_m_s.head<2>();
+  const double a = v.squaredNorm(), b = p.dot(v), c = p.squaredNorm() - reach_m * reach_m;
+  if (a == 0.0) return {t1, false};
+  const double root = std::sqrt(std::max(b * b - a * c, 0.0));
+  const double closing = min_approach_speed_m_s * reach_m;  // p·v of the slowest approach that counts
+  double s;
+  if (c >= 0) {
+    // Touching: now if moving out, when it comes back if moving in, and if sliding
+    // along the wall when p·v = b + a s grows past the threshold.
+    s = b > closing ? 0.0 : b < 0 ? -2.0 * b / a : (closing - b) / a;
+  } else {
+    s = b > 0 ? -c / (b + root) : (root - b) / a;
+  }
+  return t0 + s < t1 ? Approach{t0 + s, true} : Approach{t1, false};
+}
 
 /// The first t in [t0, t1] where the host's acceleration minus `level_m_s2` reaches 0
 /// from the side it starts on (`from_above`), searched with the host's jerk bound.

@@ -142,7 +142,9 @@ TEST_CASE("face times: the division for unaccelerated lanes is time_to_close to 
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const std::array<double, 6> special{0.0, -0.0, 1e-300, -1e-300, 1e-18, -1e-18};
   for (int trial = 0; trial < 20000; ++trial) {
-    const auto pick = [&](double scale) { return trial % 7 == 0 ? special[(trial / 7 + static_cast<int>(3 * u(rng) + 3)) % 6] : scale * u(rng); };
+    const auto pick = [&](double scale) {
+      return trial % 7 == 0 ? special[(trial / 7 + static_cast<int>(3 * u(rng) + 3)) % 6] : scale * u(rng);
+    };
     const Lanes2 lower{pick(1e-3), pick(1e-3)}, upper{pick(1e-3), pick(1e-3)}, rate{pick(2.0), pick(2.0)};
     for (const Lanes2 accel : {Lanes2{0.0, 0.0}, Lanes2{-0.0, 0.0}, Lanes2{0.0, -9.81}, Lanes2{-9.81, 3.0}}) {
       const FaceTimes faces = time_to_faces(lower, upper, rate, accel);

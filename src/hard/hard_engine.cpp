@@ -284,17 +284,16 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   const FaceTimes xy = time_to_faces(Lanes2{x.x() - grid_.x_lower_m(c.ix), x.y() - grid_.x_lower_m(c.iy)},
                                      Lanes2{grid_.x_lower_m(c.ix + 1) - x.x(), grid_.x_lower_m(c.iy + 1) - x.y()},
                                      Lanes2{v.x(), v.y()}, Lanes2{g.x(), g.y()});
-  const Lanes2 &to_lower_xy = xy.to_lower, &to_upper_xy = xy.to_upper;
   const Lanes2 to_lower_z =
       time_to_close(Lanes2{x.z() - grid_.z_lower_m(c.iz), x.z() - r - host.z_m - bed_depth_bound_m_},
                     Lanes2{v.z(), v.z() - envelope}, Lanes2{g.z(), g.z()});
   const Lanes2 to_upper_z = time_to_close(
       Lanes2{grid_.z_lower_m(c.iz + 1) - x.z(), host.z_m + cavity_.height_m() - bed_depth_bound_m_ - x.z() - r},
       Lanes2{-v.z(), -v.z() - envelope}, Lanes2{-g.z(), -g.z()});
-  const std::array<double, 6> to_face{c.ix > 0 ? to_lower_xy[0] : never,
-                                      c.ix < grid_.nx() - 1 ? to_upper_xy[0] : never,
-                                      c.iy > 0 ? to_lower_xy[1] : never,
-                                      c.iy < grid_.ny() - 1 ? to_upper_xy[1] : never,
+  const std::array<double, 6> to_face{c.ix > 0 ? xy.to_lower[0] : never,
+                                      c.ix < grid_.nx() - 1 ? xy.to_upper[0] : never,
+                                      c.iy > 0 ? xy.to_lower[1] : never,
+                                      c.iy < grid_.ny() - 1 ? xy.to_upper[1] : never,
                                       to_lower_z[0],
                                       to_upper_z[0]};
   double crossing = never;

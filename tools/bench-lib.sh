@@ -13,6 +13,10 @@ period=$(awk 'BEGIN { printf "%.10f", 1 / 30.8 }')
 # mix; runs one after the other on one core compare. PDAMP_BENCH_CORE picks the core
 # (default: the last one).
 bench_core=${PDAMP_BENCH_CORE:-$(($(nproc) - 1))}
+if ! [[ $bench_core =~ ^[0-9]+$ ]] || ((bench_core >= $(nproc))); then
+  echo "PDAMP_BENCH_CORE='$bench_core': must be a core number from 0 to $(($(nproc) - 1))" >&2
+  exit 2
+fi
 on_bench_core() { taskset -c "$bench_core" "$@"; }
 pin=()  # the prefix of pdamp's runs (see pinned_if_one_thread)
 # Runs `threads command...` with pdamp's runs in it on the bench core if threads is 1.

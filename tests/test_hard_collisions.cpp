@@ -137,7 +137,7 @@ TEST_CASE("Walton: the loss splits exactly into impact and friction and is never
   }
 }
 
-TEST_CASE("face times: the division for unaccelerated lanes is time_to_close to the bit (where rate² does not underflow)") {
+TEST_CASE("face and plane times: unaccelerated lanes divide, to time_to_close's bits unless rate² underflows") {
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const std::array<double, 6> special{0.0, -0.0, 1e-300, -1e-300, 1e-18, -1e-18};
@@ -149,6 +149,8 @@ TEST_CASE("face times: the division for unaccelerated lanes is time_to_close to 
     for (const Lanes2 accel : {Lanes2{0.0, 0.0}, Lanes2{-0.0, 0.0}, Lanes2{0.0, -9.81}, Lanes2{-9.81, 3.0}}) {
       const FaceTimes faces = time_to_faces(lower, upper, rate, accel);
       const Lanes2 to_lower = time_to_close(lower, rate, accel), to_upper = time_to_close(upper, -rate, -accel);
+      const Lanes2 to_lower_plane = time_to_plane(lower, rate, accel);
+      const Lanes2 to_upper_plane = time_to_plane(upper, -rate, -accel);
       for (int lane = 0; lane < 2; ++lane) {
         CAPTURE(trial);
         CAPTURE(lane);
@@ -159,10 +161,14 @@ TEST_CASE("face times: the division for unaccelerated lanes is time_to_close to 
           const double exact = std::max(gap, 0.0) / std::abs(rate[lane]);
           CHECK(faces.to_lower[lane] == (rate[lane] < 0.0 ? exact : never));
           CHECK(faces.to_upper[lane] == (rate[lane] > 0.0 ? exact : never));
+          CHECK(to_lower_plane[lane] == (rate[lane] < 0.0 ? std::max(lower[lane], 0.0) / -rate[lane] : never));
+          CHECK(to_upper_plane[lane] == (rate[lane] > 0.0 ? std::max(upper[lane], 0.0) / rate[lane] : never));
           continue;
         }
         CHECK(std::bit_cast<std::uint64_t>(faces.to_lower[lane]) == std::bit_cast<std::uint64_t>(to_lower[lane]));
         CHECK(std::bit_cast<std::uint64_t>(faces.to_upper[lane]) == std::bit_cast<std::uint64_t>(to_upper[lane]));
+        CHECK(std::bit_cast<std::uint64_t>(to_lower_plane[lane]) == std::bit_cast<std::uint64_t>(to_lower[lane]));
+        CHECK(std::bit_cast<std::uint64_t>(to_upper_plane[lane]) == std::bit_cast<std::uint64_t>(to_upper[lane]));
       }
     }
   }

@@ -285,9 +285,9 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
                                      Lanes2{grid_.x_lower_m(c.ix + 1) - x.x(), grid_.x_lower_m(c.iy + 1) - x.y()},
                                      Lanes2{v.x(), v.y()}, Lanes2{g.x(), g.y()});
   const Lanes2 to_lower_z =
-      time_to_close(Lanes2{x.z() - grid_.z_lower_m(c.iz), x.z() - r - host.z_m - bed_depth_bound_m_},
+      time_to_plane(Lanes2{x.z() - grid_.z_lower_m(c.iz), x.z() - r - host.z_m - bed_depth_bound_m_},
                     Lanes2{v.z(), v.z() - envelope}, Lanes2{g.z(), g.z()});
-  const Lanes2 to_upper_z = time_to_close(
+  const Lanes2 to_upper_z = time_to_plane(
       Lanes2{grid_.z_lower_m(c.iz + 1) - x.z(), host.z_m + cavity_.height_m() - bed_depth_bound_m_ - x.z() - r},
       Lanes2{-v.z(), -v.z() - envelope}, Lanes2{-g.z(), -g.z()});
   const std::array<double, 6> to_face{c.ix > 0 ? xy.to_lower[0] : never,

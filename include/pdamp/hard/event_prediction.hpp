@@ -70,6 +70,19 @@ template <class Real>
   return select(misses, zero + never, select(approaching, closing, opening));
 }
 
+/// time_to_close lane by lane, to the bit, but by one division where no lane accelerates
+/// (the faces in z and the host guards without gravity): √(rate²) is |rate| exactly, and
+/// 2 gap / (|rate| − rate) = gap / −rate towards a plane approached (except where rate²
+/// underflows, as in time_to_faces below; the division is right there too).
+[[gnu::always_inline]] inline Lanes2 time_to_plane(Lanes2 gap, Lanes2 rate, Lanes2 accel) {
+  if ((accel[0] != 0.0) | (accel[1] != 0.0)) return time_to_close(gap, rate, accel);
+  const Lanes2 zero{};
+  const auto approaching = rate < 0.0;
+  gap = select(gap < 0.0, zero, gap);
+  const Lanes2 time = gap / select(approaching, -rate, zero + 1.0);  // no 0/0 where it stays
+  return select(approaching, time, zero + never);
+}
+
 /// The first s ≥ 0 at which a point between two planes per lane, `lower_gap` above the
 /// lower and `upper_gap` below the upper, moving at `rate` with acceleration `accel`
 /// along their normal, reaches each: time_to_close(lower_gap, rate, accel) and

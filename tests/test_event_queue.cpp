@@ -14,11 +14,12 @@ using namespace pdamp::hard;
 
 namespace {
 
-/// Events of `owners` owners, each valid while its owner's counter (count_i) is unchanged.
+/// Events of `owners` owners, each valid while its owner's counter (count_j here) is
+/// unchanged: as in the engine, a change also forgets the owner's events.
 struct Reference {
   std::vector<std::uint32_t> counter;
   std::vector<Event> events;
-  bool current(const Event& e) const { return counter[e.i] == e.count_i; }
+  bool current(const Event& e) const { return counter[e.i] == e.count_j; }
   const Event* earliest() const {
     const Event* best = nullptr;
     for (const Event& e : events) {
@@ -41,7 +42,7 @@ TEST_CASE("event queue: the earliest current event first, across time scales 1e-
   double now = 0.0;
   int j = 0;
   auto push = [&](int i, double t) {
-    const Event e{t, i, j++ % 1000, ref.counter[i], 0, EventKind::sphere_sphere};
+    const Event e{t, i, j++ % 1000, ref.counter[i], EventKind::sphere_sphere};
     queue.push(e);
     ref.events.push_back(e);
   };
@@ -60,7 +61,7 @@ TEST_CASE("event queue: the earliest current event first, across time scales 1e-
     queue.pop();
     ++popped;
     ref.events.erase(std::find_if(ref.events.begin(), ref.events.end(), [&](const Event& e) {
-      return e.t_s == expected->t_s && tie_key(e) == tie_key(*expected) && e.count_i == expected->count_i;
+      return e.t_s == expected->t_s && tie_key(e) == tie_key(*expected) && e.count_j == expected->count_j;
     }));
     // The owner's trajectory changes (all its events void) or not; a few new events,
     // at time scales that change every few thousand steps: bursts, gaps and plain gas.

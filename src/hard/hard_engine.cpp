@@ -265,7 +265,7 @@ bool HardEngine::is_current(const Event& e) const {
   const std::uint32_t& second = e.kind == EventKind::sphere_sphere ? sphere_[e.j].counter
                                 : stamped                          ? sphere_[e.i].host_stamp
                                                                    : e.count_j;
-  return (sphere_[e.i].counter == e.count_i) & (second == e.count_j);
+  return second == e.count_j;  // i's own trajectory is current: its change forgot i's events
 }
 
 void HardEngine::predict(int i, std::span<const int> new_cells) {
@@ -305,7 +305,7 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   }
   const double horizon = t + crossing;
   sphere_[i].t_cross_s = horizon;
-  if (face >= 0) push({horizon, i, face, sphere_[i].counter, 0, EventKind::cell_crossing});
+  if (face >= 0) push({horizon, i, face, 0, EventKind::cell_crossing});
 
   // The spheres in the new cells first, then which of them i meets, without branches (i
   // itself does not: it neither approaches nor recedes), then only those spheres'
@@ -317,7 +317,7 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   screen_neighbours({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count, screen_result_);
   screen_result_.for_each_met(candidate_count, [&](int k, const PairQuadratic& pair) {
     const int j = candidates[k];
-    push({t + pair.time_s(), i, j, sphere_[i].counter, sphere_[j].counter, EventKind::sphere_sphere});
+    push({t + pair.time_s(), i, j, sphere_[j].counter, EventKind::sphere_sphere});
   });
 
   // The side wall, if any point of the cell is within reach of it.
@@ -327,7 +327,7 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   const bool outermost = c.ix == 0 || c.iy == 0 || c.ix == grid_.nx() - 1 || c.iy == grid_.ny() - 1;
   if (outermost || far_x * far_x + far_y * far_y >= reach * reach) {
     const Approach wall = side_wall_contact(Ballistic{x, v, t}, reach, g, t, horizon, contact_tolerance_m_);
-    if (wall.contact) push({wall.t_s, i, 0, sphere_[i].counter, 0, EventKind::side_wall});
+    if (wall.contact) push({wall.t_s, i, 0, 0, EventKind::side_wall});
   }
 
   // Caps and the resting bed: a guard from the host's speed envelope (when the sphere
@@ -341,7 +341,7 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
     return;
   }
   leave_host_sets(i);
-  if (guard < horizon) push({guard, i, 0, sphere_[i].counter, 0, EventKind::host_check});
+  if (guard < horizon) push({guard, i, 0, 0, EventKind::host_check});
 }
 
 void HardEngine::predict_host_relative(int i, std::size_t first_level) {
@@ -360,7 +360,7 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
       touching_.erase(i);
       const HostContact margin = host_contact(i, end, tiers_[level].margin_m);
       if (margin.when.t_s < horizon) {
-        push({margin.when.t_s, i, static_cast<std::int32_t>(level), sphere_[i].counter, stamp, EventKind::host_margin});
+        push({margin.when.t_s, i, static_cast<std::int32_t>(level), stamp, EventKind::host_margin});
       }
       return;
     }
@@ -369,10 +369,10 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   touching_.insert(i);
   const HostContact exact = host_contact(i, std::min(horizon, t + tiers_.back().horizon_s), 0.0);
   if (exact.when.contact) {
-    push({exact.when.t_s, i, exact.partner, sphere_[i].counter, stamp, exact.kind});
+    push({exact.when.t_s, i, exact.partner, stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
     const auto last_tier = static_cast<std::int32_t>(tiers_.size() - 1);
-    push({exact.when.t_s, i, last_tier, sphere_[i].counter, stamp, EventKind::host_margin});
+    push({exact.when.t_s, i, last_tier, stamp, EventKind::host_margin});
   }
   // Until the event, the sphere's host-frame motion is x0 + w0 s + O(s²), its
   // acceleration relative to the host bounded by |g| + the host's acceleration bound: its
@@ -424,7 +424,7 @@ bool HardEngine::defer_touching(int i, double velocity_change_m_s) {
   if (!(std::min(clearance, riders) - deviation > contact_tolerance_m_)) return false;
   if (b.direction == 0 && b.event_s < sphere_[i].t_cross_s) {
     // Its contact (if any) is no longer exact: a margin event at the same time re-predicts it.
-    push({b.event_s, i, static_cast<std::int32_t>(tiers_.size() - 1), sphere_[i].counter, ++sphere_[i].host_stamp,
+    push({b.event_s, i, static_cast<std::int32_t>(tiers_.size() - 1), ++sphere_[i].host_stamp,
           EventKind::host_margin});
   }
   b.deviation_m = deviation;
@@ -520,7 +520,7 @@ void HardEngine::predict_bed_release() {
   const double scale = std::abs(gravity_m_s2_.z()) + host_.acceleration_bound_m_s2();
   const Approach release = host_acceleration_crossing(host_, gravity_m_s2_.z(), bed_side_ > 0, t_s_,
                                                       t_s_ + 1.0 / fastest_host_rate_1_s_, 1e-12 * scale);
-  push({release.t_s, -1, release.contact ? 1 : 0, 0, host_epoch_, EventKind::bed_release});
+  push({release.t_s, -1, release.contact ? 1 : 0, host_epoch_, EventKind::bed_release});
 }
 
 void HardEngine::leave_host_sets(int i) {

@@ -9,9 +9,11 @@
 ///   (`forget`), without touching the order until the next look at the top;
 /// - an owner's list is pruned of out-of-date events whenever it is re-keyed, so an
 ///   event voided by its partner usually leaves without ever reaching the top.
-/// Events still carry the trajectory counters they were predicted with: one that went out
-/// of date after its owner was last re-keyed still reaches the top and is dropped there
-/// (`HardEngine::is_current`).
+/// An event is thus always of its owner's current trajectory; it still carries the
+/// partner's counter (or stamp) it was predicted with, and one whose partner changed after
+/// its owner was last re-keyed still reaches the top and is dropped there
+/// (`HardEngine::is_current`). The lists keep events in 16 bytes (`Stored`): four to a
+/// cache line, where every re-key reads its owner's whole list.
 ///
 /// The owners' earliest events are ordered by a calendar (Paul, J. Comput. Phys. 221,
 /// 2007): time is cut into buckets about as wide as the time in which a few events
@@ -45,18 +47,20 @@ enum class EventKind : std::uint8_t {
   bed_release,    ///< the host's acceleration stops pressing the riding spheres against their cap
 };
 
+/// A predicted event. It needs no trajectory counter of i: a change of i's trajectory
+/// forgets all of i's events (EventQueue::forget).
 struct Event {
   double t_s;
   std::int32_t i;          ///< the particle (−1 for bed_release)
-  /// The partner particle, the crossed face, or the tier a host_margin is of (its descent resumes there).
+  /// The partner particle, the crossed face, or the tier a host_margin is of (its descent
+  /// resumes there); ≥ 0.
   std::int32_t j;
-  std::uint32_t count_i;   ///< i's trajectory counter when predicted
   std::uint32_t count_j;   ///< j's counter (sphere_sphere), i's host stamp (caps, rider, host_margin) or the host epoch (bed_release)
   EventKind kind;
 };
 
 /// The order of events at one time, by kind, then particle, then partner, packed into one
-/// number (i + 1 and j below 2^29, see EventQueue::max_particles).
+/// number (i + 1 and j below 2^28, see EventQueue::max_particles).
 inline std::uint64_t tie_key(const Event& e) {
   return (static_cast<std::uint64_t>(e.kind) << 58) | (static_cast<std::uint64_t>(e.i + 1) << 29) |
          static_cast<std::uint64_t>(e.j);
@@ -76,13 +80,13 @@ class EventQueue {
       : lists_(particle_count + 1),
         keyed_(particle_count + 1),
         buckets_(std::bit_ceil(static_cast<std::size_t>(particle_count) + 1), none) {
-    if (particle_count > max_particles) throw std::length_error("the event queue orders at most 2^29 - 2 spheres");
+    if (particle_count > max_particles) throw std::length_error("the event queue orders at most 2^28 - 2 spheres");
   }
-  static constexpr int max_particles = (1 << 29) - 2;
+  static constexpr int max_particles = (1 << 28) - 2;
 
   void push(const Event& event) {
     const int owner = owner_of(event);
-    lists_[owner].push_back(event);
+    lists_[owner].push_back(Stored::of(event));
     mark_dirty(owner);
   }
   /// Drops every event predicted for sphere i (its trajectory changed).
@@ -99,8 +103,9 @@ class EventQueue {
     beyond_.clear();
   }
 
-  /// The earliest event, or nullptr if there is none. Owners changed since the last call
-  /// are re-keyed first, keeping only the events `current` accepts (staleness is for ever).
+  /// The earliest event (valid until the next call), or nullptr if there is none. Owners
+  /// changed since the last call are re-keyed first, keeping only the events `current`
+  /// accepts (staleness is for ever).
   template <class Current>
   const Event* top(Current current) {
     for (const int owner : dirty_) rekey(owner, current);
@@ -111,13 +116,14 @@ class EventQueue {
       if (!next_bucket()) return nullptr;
     }
     const Entry& top = current_.top();
-    return &lists_[top.owner][keyed_[top.owner].index];
+    top_ = event_of(static_cast<int>(top.owner), lists_[top.owner][keyed_[top.owner].index]);
+    return &top_;
   }
   /// Removes the event `top` returned.
   void pop() {
     const Entry top = current_.top();
     current_.pop();
-    std::vector<Event>& list = lists_[top.owner];
+    std::vector<Stored>& list = lists_[top.owner];
     Keyed& keyed = keyed_[top.owner];
     list[keyed.index] = list.back();
     list.pop_back();
@@ -130,6 +136,26 @@ class EventQueue {
 
  private:
   static constexpr std::int32_t none = -1;
+  /// An event in its owner's list: the owner is i (or the host, i = −1).
+  struct Stored {
+    double t_s;
+    std::uint32_t kind_j;  ///< kind << 28 | j: for one owner, the order of tie_key
+    std::uint32_t count_j;
+    static Stored of(const Event& e) {
+      return {e.t_s, static_cast<std::uint32_t>(e.kind) << 28 | static_cast<std::uint32_t>(e.j), e.count_j};
+    }
+    /// `earlier` for two events of one owner.
+    bool earlier_than(const Stored& other) const {
+      if (t_s != other.t_s) return t_s < other.t_s;
+      return kind_j < other.kind_j;
+    }
+  };
+  static_assert(sizeof(Stored) == 16);
+  Event event_of(int owner, const Stored& s) const {
+    const int i = owner == static_cast<int>(lists_.size()) - 1 ? -1 : owner;
+    return {s.t_s, i, static_cast<std::int32_t>(s.kind_j & ((1u << 28) - 1)), s.count_j,
+            static_cast<EventKind>(s.kind_j >> 28)};
+  }
   /// An owner's earliest event as the heaps order it; out of date once its version is no
   /// longer the owner's.
   struct Entry {
@@ -171,25 +197,28 @@ class EventQueue {
   void rekey(int owner, Current current) {
     Keyed& keyed = keyed_[owner];
     keyed.dirty = 0;
-    std::vector<Event>& list = lists_[owner];
+    std::vector<Stored>& list = lists_[owner];
     std::size_t best = 0;
     for (std::size_t k = 0; k < list.size();) {
-      if (!current(list[k])) {
+      if (!current(event_of(owner, list[k]))) {
         list[k] = list.back();
         list.pop_back();
         continue;
       }
-      if (k > 0 && earlier(list[k], list[best])) best = k;
+      if (k > 0 && list[k].earlier_than(list[best])) best = k;
       ++k;
     }
     keyed.index = static_cast<std::uint32_t>(best);
-    const bool same_event = !list.empty() && keyed.place != Place::none && keyed.t_s == list[best].t_s &&
-                            keyed.tie == tie_key(list[best]);
+    if (list.empty()) {
+      leave(owner);
+      return;
+    }
+    const std::uint64_t tie = tie_key(event_of(owner, list[best]));
+    const bool same_event = keyed.place != Place::none && keyed.t_s == list[best].t_s && keyed.tie == tie;
     if (same_event) return;  // perhaps moved in the list
     leave(owner);
-    if (list.empty()) return;
     keyed.t_s = list[best].t_s;
-    keyed.tie = tie_key(list[best]);
+    keyed.tie = tie;
     enter(owner);
   }
 
@@ -306,7 +335,8 @@ class EventQueue {
     for (const int owner : owners) enter(owner);
   }
 
-  std::vector<std::vector<Event>> lists_;  ///< each owner's events, unsorted
+  std::vector<std::vector<Stored>> lists_;  ///< each owner's events, unsorted
+  Event top_{};                             ///< what top() last returned
   std::vector<Keyed> keyed_;
   std::vector<int> dirty_;                ///< owners whose events changed since the last top()
   /// The first owner in each later bucket's list (its slot: the bucket modulo their number).

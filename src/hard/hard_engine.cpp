@@ -49,6 +49,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
                                       std::sqrt(scenario.host.stiffness_N_m / scenario.host.mass_kg))),
       particles_(initial),
       sphere_(initial.size()),
+      trajectory_counter_(initial.size(), 0),
       jam_{-1.0, std::vector<int>(initial.size(), 0), std::vector<std::vector<int>>(initial.size()),
            std::vector<std::uint8_t>(initial.size(), 0), {}, {}},
       in_jam_(initial.size(), 0),
@@ -262,7 +263,7 @@ bool HardEngine::is_current(const Event& e) const {
                                     1u << static_cast<unsigned>(EventKind::rider) |
                                     1u << static_cast<unsigned>(EventKind::host_margin);
   const bool stamped = (host_stamped >> static_cast<unsigned>(e.kind)) & 1u;
-  const std::uint32_t& second = e.kind == EventKind::sphere_sphere ? sphere_[e.j].counter
+  const std::uint32_t& second = e.kind == EventKind::sphere_sphere ? trajectory_counter_[e.j]
                                 : stamped                          ? sphere_[e.i].host_stamp
                                                                    : e.count_j;
   return second == e.count_j;  // i's own trajectory is current: its change forgot i's events
@@ -317,7 +318,7 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   screen_neighbours({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count, screen_result_);
   screen_result_.for_each_met(candidate_count, [&](int k, const PairQuadratic& pair) {
     const int j = candidates[k];
-    push({t + pair.time_s(), i, j, sphere_[j].counter, EventKind::sphere_sphere});
+    push({t + pair.time_s(), i, j, trajectory_counter_[j], EventKind::sphere_sphere});
   });
 
   // The side wall, if any point of the cell is within reach of it.

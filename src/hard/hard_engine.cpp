@@ -869,7 +869,7 @@ void HardEngine::collide_wall(int i, EventKind wall) {
     merge_jam(i);
     return;
   }
-  const HostState host = host_.at(t_s_);
+  const HostState host = host_now();
   const Eigen::Vector3d x = particles_.position_m.col(i);
   Eigen::Vector3d n;  // from the sphere towards the wall
   if (wall == EventKind::side_wall) {
@@ -892,7 +892,7 @@ void HardEngine::collide_wall(int i, EventKind wall) {
     turn_along_side_wall(i, n);
     predict(i);
   } else {
-    rest_if_slow(i, -n, host_.at(t_s_));
+    rest_if_slow(i, -n, host_now());  // the host as the impulse left it
   }
 }
 

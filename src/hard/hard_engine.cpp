@@ -1,6 +1,7 @@
 #include "pdamp/hard/hard_engine.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -256,7 +257,7 @@ double HardEngine::max_overlap_m() const {
 // ---------------------------------------------------------------------------------------------
 // Prediction
 
-bool HardEngine::is_current(const Event& e) const {
+inline bool HardEngine::is_current(const Event& e) const {
   if (e.kind == EventKind::bed_release) return host_epoch_ == e.count_j;
   // Where count_j came from, chosen without a jump table (its jumps mispredict).
   constexpr unsigned host_stamped = 1u << static_cast<unsigned>(EventKind::bottom_cap) |
@@ -264,9 +265,14 @@ bool HardEngine::is_current(const Event& e) const {
                                     1u << static_cast<unsigned>(EventKind::rider) |
                                     1u << static_cast<unsigned>(EventKind::host_margin);
   const bool stamped = (host_stamped >> static_cast<unsigned>(e.kind)) & 1u;
-  const std::uint32_t& second = e.kind == EventKind::sphere_sphere ? trajectory_counter_[e.j]
-                                : stamped                          ? sphere_[e.i].host_stamp
-                                                                   : e.count_j;
+  // Both read whatever the kind, then one chosen, without branches (the kinds of
+  // successive events are a coin toss); j of another kind may be no sphere: clamped.
+  const auto last = static_cast<std::uint32_t>(trajectory_counter_.size() - 1);
+  const std::uint32_t partner = trajectory_counter_[std::min(static_cast<std::uint32_t>(e.j), last)];
+  const std::uint32_t stamp = sphere_[e.i].host_stamp;
+  const std::uint32_t pair_mask = 0u - static_cast<std::uint32_t>(e.kind == EventKind::sphere_sphere);
+  const std::uint32_t stamp_mask = 0u - static_cast<std::uint32_t>(stamped);
+  const std::uint32_t second = (partner & pair_mask) | (stamp & stamp_mask) | (e.count_j & ~(pair_mask | stamp_mask));
   return second == e.count_j;  // i's own trajectory is current: its change forgot i's events
 }
 
@@ -298,13 +304,13 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
                                       c.iy < grid_.ny() - 1 ? xy.to_upper[1] : never,
                                       to_lower_z[0],
                                       to_upper_z[0]};
-  double crossing = never;
-  int face = -1;
-  for (int k = 0; k < 6; ++k) {
-    const bool sooner = to_face[k] < crossing;
-    crossing = sooner ? to_face[k] : crossing;
-    face = sooner ? k : face;
-  }
+  // The earliest face, the first of equals; none if all are `never`. Without branches:
+  // which face comes first is a coin toss (a minimum, then the faces that equal it).
+  double crossing = to_face[0];
+  for (int k = 1; k < 6; ++k) crossing = to_face[k] < crossing ? to_face[k] : crossing;
+  unsigned earliest = 0;
+  for (int k = 0; k < 6; ++k) earliest |= static_cast<unsigned>(to_face[k] == crossing) << k;
+  const int face = crossing < never ? std::countr_zero(earliest) : -1;
   const double horizon = t + crossing;
   sphere_[i].t_cross_s = horizon;
   if (face >= 0) push({horizon, i, face, 0, EventKind::cell_crossing});

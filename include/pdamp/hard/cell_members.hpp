@@ -42,8 +42,13 @@ class CellMembers {
     const int cell = cell_[particle];
     Cell& c = cells_[cell];
     cell_[particle] = none;
-    int* const inline_end = c.members.data() + std::min(c.count, inline_capacity);
-    int* const slot = std::find(c.members.data(), inline_end, particle);
+    // Its inline slot (inline_capacity if none), without a branch per slot: where a
+    // sphere sits among its cell's members is a coin toss. Slots beyond the count may
+    // still hold former members: they do not count.
+    int place = inline_capacity;
+    for (int k = inline_capacity - 1; k >= 0; --k) place = (k < c.count) & (c.members[k] == particle) ? k : place;
+    int* const slot = c.members.data() + place;
+    int* const inline_end = c.members.data() + inline_capacity;
     --c.count;
     if (slot == inline_end) {
       unlink_overflow(cell, particle);

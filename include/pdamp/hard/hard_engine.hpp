@@ -135,7 +135,7 @@ class HardEngine final : public Engine {
   /// The first contact of free sphere i, grown by `margin_m`, with a cap or rider, from
   /// now until `end_s` (or the end of the riders' window).
   HostContact host_contact(int i, double end_s, double margin_m) const;
-  bool is_current(const Event& event) const;
+  [[gnu::always_inline]] bool is_current(const Event& event) const;  // in every re-key and pop
 
   // Events.
   void handle(const Event& event);

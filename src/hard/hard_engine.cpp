@@ -50,7 +50,6 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
                                       std::sqrt(scenario.host.stiffness_N_m / scenario.host.mass_kg))),
       particles_(initial),
       sphere_(initial.size()),
-      riding_(initial.size(), 0),
       trajectory_counter_(initial.size(), 0),
       jam_{-1.0, std::vector<int>(initial.size(), 0), std::vector<std::vector<int>>(initial.size()),
            std::vector<std::uint8_t>(initial.size(), 0), {}, {}},
@@ -126,7 +125,7 @@ void HardEngine::advance_to(double t_s) {
 }
 
 Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {
-  if (riding_[i]) return particles_.position_m.col(i) + host.z_m * e_z;
+  if (sphere_[i].riding) return particles_.position_m.col(i) + host.z_m * e_z;
   return flight(i).position_at(t_s_, gravity_m_s2_);
 }
 
@@ -153,7 +152,7 @@ State HardEngine::state() const {
     const int k = static_cast<int>(i);
     s.particles.position_m.col(i) = position_now(k, host);
     s.particles.velocity_m_s.col(i) =
-        riding_[k] ? Eigen::Vector3d(host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
+        sphere_[k].riding ? Eigen::Vector3d(host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
   }
   return s;
 }
@@ -167,7 +166,7 @@ Observation HardEngine::observe() const {
     const int k = static_cast<int>(i);
     const double m = particles_.mass_kg[i];
     const Eigen::Vector3d v =
-        riding_[k] ? Eigen::Vector3d(o.host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
+        sphere_[k].riding ? Eigen::Vector3d(o.host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
     e.particle_translational_J += 0.5 * m * v.squaredNorm();
     e.particle_rotational_J += 0.5 * particles_.moment_of_inertia(i) * particles_.angular_velocity_rad_s.col(i).squaredNorm();
     e.gravitational_potential_J -= m * gravity_m_s2_.dot(position_now(k, o.host));
@@ -582,7 +581,7 @@ void HardEngine::rebuild_predictions() {
   }
   touching_.clear();
   for (int i = 0; i < static_cast<int>(particles_.size()); ++i) {
-    if (!riding_[i]) predict(i);
+    if (!sphere_[i].riding) predict(i);
   }
   predict_bed_release();
 }
@@ -733,7 +732,7 @@ void HardEngine::merge_jam(int i) {
   for (std::size_t k = 0; k < members.size(); ++k) {
     hold |= jam_.hold[members[k]];
     for (const int j : jam_.partners[members[k]]) {
-      if (in[j] || riding_[j]) continue;
+      if (in[j] || sphere_[j].riding) continue;
       in[j] = 1;
       members.push_back(j);
     }
@@ -1091,7 +1090,7 @@ void HardEngine::attach(int i) {
   free_cells_.remove(i);
   leave_host_sets(i);
   new_trajectory(i);
-  riding_[i] = 1;
+  sphere_[i].riding = 1;
   const Eigen::Vector3d host_frame = particles_.position_m.col(i) - host.z_m * e_z;
   particles_.position_m.col(i) = host_frame;
   particles_.velocity_m_s.col(i).setZero();
@@ -1114,7 +1113,7 @@ void HardEngine::attach(int i) {
 void HardEngine::detach(int i, const HostState& host) {
   book_host(t_s_);  // with the riding mass of the interval that ends now
   rider_cells_.remove(i);
-  riding_[i] = 0;
+  sphere_[i].riding = 0;
   new_trajectory(i);
   particles_.position_m.col(i) += host.z_m * e_z;
   particles_.velocity_m_s.col(i) = host.v_m_s * e_z;
@@ -1129,7 +1128,7 @@ void HardEngine::release_bed() {
   const HostState host = host_.at(t_s_);
   std::vector<int> released;
   for (int i = 0; i < static_cast<int>(particles_.size()); ++i) {
-    if (riding_[i]) released.push_back(i);
+    if (sphere_[i].riding) released.push_back(i);
   }
   for (const int i : released) detach(i, host);
   restart_host(host);

@@ -187,17 +187,16 @@ class HardEngine final : public Engine {
   // Spheres: free ones hold lab position and velocity at t_ref; riding ones hold their
   // host-frame position (lab position minus z_host e_z).
   PackedParticles particles_;
-  /// What the events of a free sphere touch of it besides its flight, kept together: 32
-  /// bytes, within one cache line, not one line per array.
-  struct alignas(32) SphereState {
+  /// What the events touch of each sphere besides its flight, kept together: one cache
+  /// line a sphere, not one per array.
+  struct SphereState {
     CellCoord cell{};                  ///< lab cell of a free sphere (unwrapped z)
     std::uint32_t host_stamp = 0;      ///< bumped whenever its host-dependent event is replaced
     double t_cross_s = never;          ///< when a free sphere next crosses a cell face
     double last_collision_s = -never;  ///< when it last collided
+    std::uint8_t riding = 0;           ///< it rides with the host
   };
-  static_assert(sizeof(SphereState) == 32);
   std::vector<SphereState> sphere_;
-  std::vector<std::uint8_t> riding_;  ///< 1 for a sphere that rides with the host
   /// Bumped whenever a sphere's trajectory changes. Apart from SphereState: every contact
   /// a prediction enters reads its partner's, and every sphere–sphere event that reaches
   /// the queue's top or a re-key; 4 bytes a sphere stay in cache where a SphereState would not.

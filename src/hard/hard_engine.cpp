@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <sstream>
 #include <tuple>
+#include <unistd.h>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
@@ -30,6 +31,13 @@ constexpr std::array<double, 3> margin_fractions{0.1, 0.002, 4e-5};
 constexpr int jam_repeats = 64;
 
 const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
+
+/// Whether `bytes` of randomly read data outgrow half of this processor's L2 cache (1 MB
+/// if the system does not say).
+bool outgrows_l2_cache(std::size_t bytes) {
+  const long l2_bytes = sysconf(_SC_LEVEL2_CACHE_SIZE);
+  return bytes > static_cast<std::size_t>(l2_bytes > 0 ? l2_bytes : 1L << 20) / 2;
+}
 
 }  // namespace
 
@@ -68,6 +76,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()) {
   host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
+  prefetch_records_ = outgrows_l2_cache(static_cast<std::size_t>(initial.size()) * sizeof(FlightRecord));
   // A collision cascade through a touching bed can take a few events per contact at one
   // instant; far more than that means no progress.
   stall_limit_ = 1000 * static_cast<std::int64_t>(initial.size()) + 100000;
@@ -321,6 +330,9 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   const int candidate_count = new_cells.size() == std::tuple_size_v<Around>
                                   ? free_cells_.gather<std::tuple_size_v<Around>>(new_cells.data(), candidates)
                                   : free_cells_.gather<std::tuple_size_v<Layer>>(new_cells.data(), candidates);
+  if (prefetch_records_) {
+    for (int k = 0; k < candidate_count; ++k) __builtin_prefetch(&particles_.record(candidates[k]));
+  }
   screen_neighbours({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count, screen_result_);
   screen_result_.for_each_met(candidate_count, [&](int k, const PairQuadratic& pair) {
     const int j = candidates[k];

@@ -85,3 +85,35 @@ TEST_CASE("event queue: the earliest current event first, across time scales 1e-
   }
   CHECK(popped == 60000);
 }
+
+TEST_CASE("event queue: events come back whole, ties in tie_key order, the host's with i = -1") {
+  // One owner's events at one instant, of every kind and with partners up to the largest
+  // index, pushed in scrambled order; the lists keep them packed (kind and partner in one
+  // word), and must hand back every field as pushed.
+  constexpr int owners = 5;
+  EventQueue queue(owners);
+  std::vector<Event> pushed;
+  const std::int32_t largest = EventQueue::max_particles;
+  std::uint32_t count = 7;
+  for (const EventKind kind : {EventKind::host_margin, EventKind::sphere_sphere, EventKind::cell_crossing,
+                               EventKind::rider, EventKind::side_wall, EventKind::top_cap}) {
+    for (const std::int32_t j : {largest, 0, 3}) pushed.push_back({1.0, 2, j, count++, kind});
+  }
+  pushed.push_back({1.0, -1, 1, count++, EventKind::bed_release});
+  pushed.push_back({0.5, -1, 0, count++, EventKind::bed_release});
+  for (const Event& e : pushed) queue.push(e);
+  std::vector<Event> expected = pushed;
+  std::sort(expected.begin(), expected.end(), earlier);
+  const auto every = [](const Event&) { return true; };
+  for (const Event& want : expected) {
+    const Event* got = queue.top(every);
+    REQUIRE(got != nullptr);
+    CHECK(got->t_s == want.t_s);
+    CHECK(got->i == want.i);
+    CHECK(got->j == want.j);
+    CHECK(got->count_j == want.count_j);
+    CHECK(got->kind == want.kind);
+    queue.pop();
+  }
+  CHECK(queue.top(every) == nullptr);
+}

@@ -6,8 +6,8 @@
 #      every cap collision is an impulse on the host (what those cost as N grows).
 #   2. The paper's Table 1 damper for 1.5 s on the hard model (wall time of the run
 #      itself; the shared settled bed is made once and kept in build/bench/bench.sqlite).
-#   3. With --against-soft: Table 1 again, hard, soft (one thread), hard, on the same core
-#      one after the other, and the ratio of the soft run's wall time to each hard one's.
+#   3. With --against-soft: then Table 1 soft (one thread) and hard again, on the same core,
+#      and the ratio of the soft run's wall time to each hard one's.
 # Usage: tools/bench-hard.sh [--quick] [--against-soft]
 #   (--quick: N = 1,000 and 10,000, Table 1 for 0.3 s)
 # Every timed run is on one core (PDAMP_BENCH_CORE, see tools/bench-lib.sh).
@@ -37,10 +37,10 @@ sqlite3 "$db" "SELECT 'table1 hard ' || duration_s || ' s: wall ' || round(wall_
   energy_balance_rel_err FROM runs WHERE run_id = $id"
 sqlite3 "$db" "SELECT name || ' ' || value FROM run_statistics WHERE run_id = $id AND name LIKE 'events_%'"
 if [ "$against_soft" = 1 ]; then
+  # The hard run above comes first; then soft, and hard again.
   table1() { pinned_if_one_thread 1 run --scenario "$root/data/scenarios/table1.ini" --duration "$table1_duration" "$@"; }
-  hard_before=$(table1 --model hard)
   soft=$(table1 --model soft --threads 1)
   hard_after=$(table1 --model hard)
-  awk -v d="$table1_duration" -v a="$(wall "$hard_before")" -v s="$(wall "$soft")" -v b="$(wall "$hard_after")" \
+  awk -v d="$table1_duration" -v a="$(wall "$id")" -v s="$(wall "$soft")" -v b="$(wall "$hard_after")" \
     'BEGIN { printf "table1 %s s on one core: hard %.2f s, soft %.2f s, hard %.2f s; soft/hard %.1f and %.1f\n", d, a, s, b, s / a, s / b }'
 fi

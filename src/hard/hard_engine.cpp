@@ -386,7 +386,7 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
     if (level + 1 < tiers_.size()) tiers_[level + 1].members.insert(i);
   }
   touching_.insert(i);
-  const HostContact exact = host_contact(i, std::min(horizon, t + tiers_.back().horizon_s), 0.0);
+  const HostContact exact = host_contact(i, std::min(horizon, t + tiers_.back().horizon_s), 0.0, &riders_searched_);
   if (exact.when.contact) {
     push({exact.when.t_s, i, exact.partner, stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
@@ -407,12 +407,12 @@ void HardEngine::predict_host_relative(int i, std::size_t first_level) {
                       position.z() + std::max(velocity.z() * span, 0.0) + curve};
   const double closing = velocity.norm() * span + curve;
   if (riding_count_ > 0) {
-    for_each_rider_in(exact.box_centre_m, exact.box_half_m, [&](int j) {
+    for (const int j : riders_searched_) {
       const Eigen::Vector3d rider = particles_.position_m.col(j);
       const double gap = (position - rider).norm() - (particles_.radius_m[i] + particles_.radius_m[j]) - closing;
       if (rider.z() > bound.lowest_m) bound.gap_above_m = std::min(bound.gap_above_m, gap);
       if (rider.z() < bound.highest_m) bound.gap_below_m = std::min(bound.gap_below_m, gap);
-    });
+    }
   }
   touching_bound_[i] = bound;
 }
@@ -455,10 +455,11 @@ template <class Visit>
 void HardEngine::for_each_rider_in(const Eigen::Vector3d& centre_m, const Eigen::Vector3d& half_m, Visit visit) const {
   // The cells that cover the box (a rider's centre outside them is outside it).
   const CellCoord low = grid_.coord_of(centre_m - half_m), high = grid_.coord_of(centre_m + half_m);
+  // Host-frame layers lie within the grid's first period: no wrap, no division per cell.
   const int top_layer = static_cast<int>(std::floor(cavity_.height_m() / grid_.cell_size_m()));
   for (int iz = std::max(0, low.iz); iz <= std::min(top_layer, high.iz); ++iz) {
     for (int iy = low.iy; iy <= high.iy; ++iy) {
-      for (int ix = low.ix; ix <= high.ix; ++ix) rider_cells_.for_each_in(grid_.index({ix, iy, iz}), visit);
+      for (int ix = low.ix; ix <= high.ix; ++ix) rider_cells_.for_each_in(grid_.index_in_period({ix, iy, iz}), visit);
     }
   }
 }
@@ -487,7 +488,8 @@ bool HardEngine::within_host_margin(int i, double end_s, double margin_m) const 
   return within;
 }
 
-HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double margin_m) const {
+HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double margin_m,
+                                                 std::vector<int>* riders_searched) const {
   const double t = t_s_;
   const Ballistic f = flight(i);
   const double r = particles_.radius_m[i];
@@ -522,14 +524,14 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   Eigen::Vector3d half = f.velocity_at(t, gravity_m_s2_).cwiseAbs() * span + 0.5 * gravity_m_s2_.cwiseAbs() * span * span;
   half.array() += r + max_radius_m_ + margin_m;
   half.z() += host_speed * span + (margin_m > 0.0 ? 0.0 : touching_slack_m_);
+  if (riders_searched) riders_searched->clear();
   for_each_rider_in(centre, half, [&](int j) {
+    if (riders_searched) riders_searched->push_back(j);
     consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j] + margin_m, host_, host,
                            gravity_m_s2_, t, window_end, contact_tolerance_m_, closing),
              EventKind::rider, j);
   });
   consider({window_end, false}, EventKind::host_margin, 0);
-  best.box_centre_m = centre;
-  best.box_half_m = half;
   return best;
 }
 

@@ -69,6 +69,7 @@ class CellMembers {
   void for_each_in(int cell, Visit visit) const {
     const Cell& c = cells_[cell];
     for (int k = 0; k < std::min(c.count, inline_capacity); ++k) visit(c.members[k]);
+    if (c.count <= inline_capacity) return;  // without reading the overflow heads' cache line
     for (int p = overflow_[cell]; p != none; p = next_[p]) visit(p);
   }
   /// Writes the members of `cell` to `out` and returns how many there are; `out` must

@@ -122,9 +122,6 @@ class HardEngine final : public Engine {
     Approach when;
     EventKind kind;
     int partner;
-    /// The box the riders were searched in (host frame; with margin 0 it reaches
-    /// touching_slack_m_ farther in z than the path needs).
-    Eigen::Vector3d box_centre_m = Eigen::Vector3d::Zero(), box_half_m = Eigen::Vector3d::Zero();
   };
   /// Calls visit(j) for each rider j in the cells that cover the host-frame box centre ± half.
   template <class Visit>
@@ -133,8 +130,10 @@ class HardEngine final : public Engine {
   /// host_contact(i, end_s, margin_m) answers at its first step, without its root finders.
   bool within_host_margin(int i, double end_s, double margin_m) const;
   /// The first contact of free sphere i, grown by `margin_m`, with a cap or rider, from
-  /// now until `end_s` (or the end of the riders' window).
-  HostContact host_contact(int i, double end_s, double margin_m) const;
+  /// now until `end_s` (or the end of the riders' window). `riders_searched`, if given,
+  /// receives the riders it looked at: all those in a host-frame box around the path
+  /// (with margin 0 it reaches touching_slack_m_ farther in z than the path needs).
+  HostContact host_contact(int i, double end_s, double margin_m, std::vector<int>* riders_searched = nullptr) const;
   [[gnu::always_inline]] bool is_current(const Event& event) const;  // in every re-key and pop
 
   // Events.
@@ -267,6 +266,7 @@ class HardEngine final : public Engine {
   EventQueue queue_;
   std::vector<int> neighbours_;  ///< predict's scratch: the free spheres around the one predicted
   ScreenResult screen_result_;  ///< predict's scratch: the contact tests of those neighbours
+  std::vector<int> riders_searched_;  ///< predict_host_relative's scratch: the riders its exact search saw
   double contact_tolerance_m_;
   double max_radius_m_;
   double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart

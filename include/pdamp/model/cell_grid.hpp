@@ -36,6 +36,8 @@ class CellGrid {
 
   CellCoord coord_of(const Eigen::Vector3d& p) const;
   int index(const CellCoord& c) const;
+  /// index(c) for a layer within the first period (0 ≤ iz < nz), without wrapping it.
+  int index_in_period(const CellCoord& c) const { return (c.iz * n_xy_ + c.iy) * n_xy_ + c.ix; }
   int cell_of(const Eigen::Vector3d& p) const { return index(coord_of(p)); }
 
   /// The distinct cells within one cell of `c` (itself included); returns how many.
@@ -71,8 +73,7 @@ inline CellCoord CellGrid::coord_of(const Eigen::Vector3d& p) const {
 
 inline int CellGrid::index(const CellCoord& c) const {
   const int remainder = c.iz % n_z_;  // one integer division: they are slow
-  const int iz = remainder < 0 ? remainder + n_z_ : remainder;
-  return (iz * n_xy_ + c.iy) * n_xy_ + c.ix;
+  return index_in_period({c.ix, c.iy, remainder < 0 ? remainder + n_z_ : remainder});
 }
 
 inline void CellGrid::block(const CellCoord& c, int outside, std::array<int, 27>& out) const {

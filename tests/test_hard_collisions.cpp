@@ -403,6 +403,54 @@ TEST_CASE("rider contacts: the first contact with a sphere riding on a fast host
   CHECK(contacts > 50);
 }
 
+TEST_CASE("stays_apart: where it holds, the cap and rider root finders find no contact on the span") {
+  // The engine skips the root finders where stays_apart holds; they must then have had
+  // nothing to find. Gaps from 1e-14 m (within the tolerance) to mm, a fast host.
+  const PrescribedHost host(0.002, 400.0);
+  const Eigen::Vector3d g(0, 0, -9.81);
+  const double r = 5e-4, height = 0.01, sigma = 1e-3, tolerance = 1e-14;
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int apart = 0, not_apart = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    const double t0 = uniform(rng) * 0.01, span = std::pow(10.0, -7.0 + 5.0 * uniform(rng));
+    const HostState h0 = host.trajectory.at(t0);
+    const double gap = std::pow(10.0, -14.0 + 11.0 * uniform(rng));
+    const Eigen::Vector3d v(uniform(rng) - 0.5, uniform(rng) - 0.5, 4.0 * (uniform(rng) - 0.5));
+    const double relative_vz = v.z() - h0.v_m_s;
+    const bool top = trial % 2 == 1;
+    const double z = top ? h0.z_m + height - r - gap : h0.z_m + r + gap;
+    const Ballistic to_cap{Eigen::Vector3d(0, 0, z), v, t0};
+    const double cap_curvature = std::abs(g.z()) + host.trajectory.acceleration_bound_m_s2();
+    const bool cap_apart = stays_apart(cap_gap_m(to_cap, r, top, height, h0, g, t0), top ? -relative_vz : relative_vz,
+                                       cap_curvature, span, tolerance);
+    if (cap_apart) {
+      const Approach found = cap_contact(to_cap, r, top, height, host.trajectory, h0, g, t0, t0 + span, tolerance);
+      REQUIRE(!found.contact);
+      CHECK(found.t_s == t0 + span);
+    }
+    // A rider below the sphere's path, at host-frame (0, 0, 2 mm).
+    const Eigen::Vector3d rider(0, 0, 0.002);
+    Eigen::Vector3d offset(uniform(rng) - 0.5, uniform(rng) - 0.5, uniform(rng) - 0.5);
+    offset = offset.normalized() * (sigma + gap);
+    const Ballistic to_rider{rider + offset + h0.z_m * Eigen::Vector3d::UnitZ(), v, t0};
+    Eigen::Vector3d relative_v = v;
+    relative_v.z() -= h0.v_m_s;
+    const bool rider_apart = stays_apart(rider_offset_m(to_rider, rider, h0, g, t0).norm() - sigma, -relative_v.norm(),
+                                         g.norm() + host.trajectory.acceleration_bound_m_s2(), span, tolerance);
+    if (rider_apart) {
+      const Approach found = rider_contact(to_rider, rider, sigma, host.trajectory, h0, g, t0, t0 + span, tolerance);
+      REQUIRE(!found.contact);
+      CHECK(found.t_s == t0 + span);
+    }
+    apart += cap_apart + rider_apart;
+    not_apart += !cap_apart + !rider_apart;
+  }
+  // Both answers come up often.
+  CHECK(apart > 1000);
+  CHECK(not_apart > 1000);
+}
+
 TEST_CASE("side wall under tilted gravity: the quartic's first root, checked by sampling") {
   const Eigen::Vector3d g(3.0, -2.0, -9.0);
   const double reach = 0.005, tolerance = 1e-14;

@@ -504,14 +504,24 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
                           (!best.when.contact || std::tie(kind, partner) < std::tie(best.kind, best.partner));
     if (a.t_s < best.when.t_s || wins_tie) best = {a, kind, partner};
   };
+  // The root finders run only where the bounds on the motion let a gap close: not for the
+  // cap a sphere is far from, nor for most riders in the box (a result they would give,
+  // no contact until the span's end, changes nothing that is used).
   const double height = cavity_.height_m();
   const HostState host = host_now();
-  consider(cap_contact(f, r + margin_m, false, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_,
-                       closing),
-           EventKind::bottom_cap, 0);
-  consider(cap_contact(f, r + margin_m, true, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_,
-                       closing),
-           EventKind::top_cap, 0);
+  Eigen::Vector3d velocity = f.velocity_at(t, gravity_m_s2_);  // host frame
+  velocity.z() -= host.v_m_s;
+  const double acceleration_bound = host_.acceleration_bound_m_s2();
+  for (const bool top : {false, true}) {
+    const double gap = cap_gap_m(f, r + margin_m, top, height, host, gravity_m_s2_, t);
+    const double rate = top ? -velocity.z() : velocity.z();
+    if (stays_apart(gap, rate, std::abs(gravity_m_s2_.z()) + acceleration_bound, end_s - t, contact_tolerance_m_)) {
+      continue;
+    }
+    consider(cap_contact(f, r + margin_m, top, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_,
+                         closing),
+             top ? EventKind::top_cap : EventKind::bottom_cap, 0);
+  }
   if (riding_count_ == 0) return best;
   // Riders within reach of the sphere's host-frame path until the host has moved at most
   // a cell: a box around the path, widened by the largest contact distance.
@@ -524,11 +534,18 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   Eigen::Vector3d half = f.velocity_at(t, gravity_m_s2_).cwiseAbs() * span + 0.5 * gravity_m_s2_.cwiseAbs() * span * span;
   half.array() += r + max_radius_m_ + margin_m;
   half.z() += host_speed * span + (margin_m > 0.0 ? 0.0 : touching_slack_m_);
+  // The distance to a rider closes at most at the relative speed, which grows at most by
+  // |g| + |z_h''|.
+  const double speed = velocity.norm(), rider_curvature = gravity_m_s2_.norm() + acceleration_bound;
   if (riders_searched) riders_searched->clear();
   for_each_rider_in(centre, half, [&](int j) {
     if (riders_searched) riders_searched->push_back(j);
-    consider(rider_contact(f, particles_.position_m.col(j), r + particles_.radius_m[j] + margin_m, host_, host,
-                           gravity_m_s2_, t, window_end, contact_tolerance_m_, closing),
+    const auto rider = particles_.position_m.col(j);
+    const double contact_distance = r + particles_.radius_m[j] + margin_m;
+    const double gap = (centre - rider).norm() - contact_distance;
+    if (stays_apart(gap, -speed, rider_curvature, span, contact_tolerance_m_)) return;
+    consider(rider_contact(f, rider, contact_distance, host_, host, gravity_m_s2_, t, window_end, contact_tolerance_m_,
+                           closing),
              EventKind::rider, j);
   });
   consider({window_end, false}, EventKind::host_margin, 0);

@@ -201,6 +201,16 @@ Approach earliest_contact(Gap gap, double t0, double t1, double curvature_bound,
   return {std::min(t, t1), false};
 }
 
+/// Whether a gap of `gap_m` now, changing at `rate_m_s` with |gap''| ≤ `curvature_bound`,
+/// surely stays above twice `tolerance_m` for `span_s`: then earliest_contact on that span
+/// (whose samples count a gap within the tolerance) finds nothing, and need not run. The
+/// lower bound gap + rate·s − ½·bound·s² is least at an end of the span; twice the
+/// tolerance leaves the samples' round-off a tolerance to spare.
+inline bool stays_apart(double gap_m, double rate_m_s, double curvature_bound, double span_s, double tolerance_m) {
+  const double lowest = std::min(gap_m, gap_m + span_s * (rate_m_s - 0.5 * curvature_bound * span_s));
+  return lowest > 2.0 * tolerance_m;
+}
+
 /// A free sphere's gap to the bottom (z − r − z_h) or top (z_h + H − z − r) cap at time
 /// t, the host then at `host` (cap_contact's gap, to the bit).
 inline double cap_gap_m(const Ballistic& flight, double radius_m, bool top, double height_m, const HostState& host,

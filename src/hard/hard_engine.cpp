@@ -493,6 +493,7 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   const double t = t_s_;
   const Ballistic f = flight(i);
   const double r = particles_.radius_m[i];
+  if (riders_searched) riders_searched->clear();
   HostContact best{{end_s, false}, EventKind::host_margin, 0};
   // A margin is reached whichever way the sphere moves: a sphere within it but receding
   // can still be caught by a host that strays by less than the margin.
@@ -537,7 +538,6 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   // The distance to a rider closes at most at the relative speed, which grows at most by
   // |g| + |z_h''|.
   const double speed = velocity.norm(), rider_curvature = gravity_m_s2_.norm() + acceleration_bound;
-  if (riders_searched) riders_searched->clear();
   for_each_rider_in(centre, half, [&](int j) {
     if (riders_searched) riders_searched->push_back(j);
     const auto rider = particles_.position_m.col(j);

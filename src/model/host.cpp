@@ -143,7 +143,6 @@ HostTrajectory::HostTrajectory(const HostModel& model, double t0_s, HostState st
     const double kd = k - mass_kg_ * w * w, cd = c * w, det = kd * kd + cd * cd;
     forced_sin_m_ = (kd * a + cd * b) / det;
     forced_cos_m_ = (kd * b - cd * a) / det;
-    forced_ = true;
   }
   const double forced_z = forced_sin_m_ * std::sin(w * t0_s) + forced_cos_m_ * std::cos(w * t0_s);
   const double forced_v = w * (forced_sin_m_ * std::cos(w * t0_s) - forced_cos_m_ * std::sin(w * t0_s));
@@ -187,7 +186,8 @@ HostState HostTrajectory::at(double t_s) const {
   const double alpha = decay_rate_1_s_;
   const double u = u0_m_ * ec + (du0_m_s_ + alpha * u0_m_) * es;
   const double du = du0_m_s_ * ec - (omega0_sq_ * u0_m_ + alpha * du0_m_s_) * es;
-  if (!forced_) return {offset_m_ + u, du};  // the harmonic's terms are zeros
+  // Without a forced harmonic (a free host) its terms are zeros: no sin ωt and cos ωt.
+  if (forced_sin_m_ == 0.0 && forced_cos_m_ == 0.0) return {offset_m_ + u, du};
   const double sin_wt = std::sin(w * t_s), cos_wt = std::cos(w * t_s);
   return {offset_m_ + forced_sin_m_ * sin_wt + forced_cos_m_ * cos_wt + u,
           w * (forced_sin_m_ * cos_wt - forced_cos_m_ * sin_wt) + du};

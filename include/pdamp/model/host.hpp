@@ -102,7 +102,6 @@ class HostTrajectory {
   // Response = static offset + forced harmonic + free part u(s), s = t − t0.
   double offset_m_ = 0.0;
   double forced_sin_m_ = 0.0, forced_cos_m_ = 0.0;
-  bool forced_ = false;  ///< whether there is a forced harmonic: a free host needs no sin ωt, cos ωt
   double u0_m_ = 0.0, du0_m_s_ = 0.0;
   double decay_rate_1_s_ = 0.0;  ///< α = C / 2M
   double lambda_1_s2_ = 0.0;     ///< K/M − α²: > 0 under-, 0 critically, < 0 over-damped

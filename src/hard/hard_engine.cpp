@@ -77,6 +77,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       host_(host_model_, 0.0, host_model_.initial_state()) {
   host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
   prefetch_records_ = outgrows_l2_cache(static_cast<std::size_t>(initial.size()) * sizeof(FlightRecord));
+  prefetch_cells_ = outgrows_l2_cache(free_cells_.cells_bytes());
   // A collision cascade through a touching bed can take a few events per contact at one
   // instant; far more than that means no progress.
   stall_limit_ = 1000 * static_cast<std::int64_t>(initial.size()) + 100000;
@@ -679,6 +680,15 @@ HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, 
 }
 
 void HardEngine::collide_spheres(int i, int j) {
+  // The cells around both spheres are asked for first: with many spheres they are out of
+  // cache, and their loads then overlap the collision instead of stalling the predictions.
+  Around around_i, around_j;
+  grid_.block(sphere_[i].cell, grid_.cell_count(), around_i);
+  grid_.block(sphere_[j].cell, grid_.cell_count(), around_j);
+  if (prefetch_cells_) {
+    free_cells_.prefetch(around_i);
+    free_cells_.prefetch(around_j);
+  }
   bring_to_now(i);
   bring_to_now(j);
   if (note_collision(i, j)) {
@@ -705,8 +715,8 @@ void HardEngine::collide_spheres(int i, int j) {
   friction_J_ += out.friction_J;
   new_trajectory(i);
   new_trajectory(j);
-  predict(i);
-  predict(j);
+  predict(i, around_i);
+  predict(j, around_j);
 }
 
 bool HardEngine::note_collision(int i, int j, std::uint8_t hold) {

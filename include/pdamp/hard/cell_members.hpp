@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <span>
 #include <vector>
 
 namespace pdamp::hard {
@@ -84,6 +85,11 @@ class CellMembers {
     return c.count;
   }
   static constexpr int copy_width = 4;
+  /// Asks for the cache lines of `cells`, to be gathered soon.
+  void prefetch(std::span<const int> cells) const {
+    for (const int cell : cells) __builtin_prefetch(&cells_[cell]);
+  }
+  std::size_t cells_bytes() const { return cells_.size() * sizeof(Cell); }
   /// The members of the `cell_count` cells `cells` written one after another to `out`
   /// (room for all of them and copy_width more), and how many there are. Unrolled, and
   /// without looking at a cell's count but to add it: the rare cell with overflow members

@@ -8,7 +8,12 @@
 #      itself; the shared settled bed is made once and kept in build/bench/bench.sqlite).
 #   3. With --against-soft: then Table 1 soft (one thread) and hard again, on the same core,
 #      and the ratio of the soft run's wall time to each hard one's.
-# Usage: tools/bench-hard.sh [--quick] [--against-soft]
+#   4. With --counts, instead of all that: what one collision of the gas (fixed host) costs
+#      in operations as N grows, under cachegrind with this machine's L1d and L2 sizes —
+#      instructions, L1 and L2 misses per collision, from the difference of a 2·10⁵- and a
+#      4·10⁵-collision run, so that setting up and warming up cancel. Deterministic (no
+#      timing); a few minutes.
+# Usage: tools/bench-hard.sh [--quick] [--against-soft] | --counts
 #   (--quick: N = 1,000 and 10,000, Table 1 for 0.3 s)
 # Every timed run is on one core (PDAMP_BENCH_CORE, see tools/bench-lib.sh).
 set -euo pipefail
@@ -16,17 +21,47 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 sizes="1000 10000 100000"
 table1_duration=1.5
 against_soft=0
+counts=0
 for arg in "$@"; do
   case $arg in
     --quick) sizes="1000 10000"; table1_duration=0.3 ;;
     --against-soft) against_soft=1 ;;
-    *) echo "tools/bench-hard.sh: unknown option '$arg' (valid: --quick, --against-soft)" >&2; exit 2 ;;
+    --counts) counts=1 ;;
+    *) echo "tools/bench-hard.sh: unknown option '$arg' (valid: --quick, --against-soft, --counts)" >&2; exit 2 ;;
   esac
 done
+bench="$root/build/release/tools/bench/pdamp_bench"
+if [ "$counts" = 1 ]; then
+  "$root/tools/setup.sh" valgrind
+  "$root/tools/build.sh" release >/dev/null
+  l1d=$(getconf LEVEL1_DCACHE_SIZE); l1d_ways=$(getconf LEVEL1_DCACHE_ASSOC)
+  l2=$(getconf LEVEL2_CACHE_SIZE); l2_ways=$(getconf LEVEL2_CACHE_ASSOC)
+  caches=(--D1="${l1d:-49152},${l1d_ways:-12},64" --LL="${l2:-1048576},${l2_ways:-8},64")
+  work=$(mktemp -d)
+  trap 'rm -rf "$work"' EXIT
+  echo "per collision (cachegrind ${caches[*]}): instructions, L1d misses, L2 misses"
+  for n in $sizes; do
+    for c in 200000 400000; do
+      valgrind --tool=cachegrind --cache-sim=yes "${caches[@]}" --cachegrind-out-file="$work/cg.$c" \
+        "$bench" --particles "$n" --host fixed --collisions "$c" >"$work/out.$c" 2>/dev/null
+    done
+    # summary: Ir I1mr ILmr Dr D1mr DLmr Dw D1mw DLmw
+    awk -v n="$n" '
+      FNR == 1 { file++ }
+      /^summary:/ { for (k = 2; k <= NF; k++) s[file, k] = $k }
+      /collisions/ { for (k = 1; k < NF; k++) if ($k == "collisions") c[file] = $(k + 1) }
+      END {
+        d = (c[4] - c[2])
+        printf "N %7d  instructions %6.0f  L1d misses %5.1f  L2 misses %5.1f\n", n,
+          (s[3, 2] - s[1, 2]) / d, (s[3, 6] + s[3, 9] - s[1, 6] - s[1, 9]) / d,
+          (s[3, 7] + s[3, 10] - s[1, 7] - s[1, 10]) / d
+      }' "$work/cg.200000" "$work/out.200000" "$work/cg.400000" "$work/out.400000"
+  done
+  exit 0
+fi
 "$root/tools/setup.sh"
 "$root/tools/build.sh" release >/dev/null
 source "$root/tools/bench-lib.sh"
-bench="$root/build/release/tools/bench/pdamp_bench"
 for host in fixed free; do
   for n in $sizes; do
     on_bench_core "$bench" --particles "$n" --host "$host"

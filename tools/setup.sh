@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Installs what pdamp needs to build and test on Debian 12, if it is missing.
 # Idempotent: installs nothing when everything is present. Needs root (or sudo).
+# Usage: tools/setup.sh [extra Debian packages, e.g. valgrind for tools/bench-hard.sh --counts]
 set -euo pipefail
 
-packages=(g++ cmake make libboost-dev libboost-program-options-dev libeigen3-dev libsqlite3-dev doctest-dev sqlite3)
+packages=(g++ cmake make libboost-dev libboost-program-options-dev libeigen3-dev libsqlite3-dev doctest-dev sqlite3 "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

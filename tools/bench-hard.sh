@@ -30,20 +30,29 @@ for arg in "$@"; do
     *) echo "tools/bench-hard.sh: unknown option '$arg' (valid: --quick, --against-soft, --counts)" >&2; exit 2 ;;
   esac
 done
+if [ "$counts" = 1 ] && [ "$against_soft" = 1 ]; then
+  echo "tools/bench-hard.sh: --counts runs no timed case, so --against-soft has nothing to add; give one of them" >&2
+  exit 2
+fi
 bench="$root/build/release/tools/bench/pdamp_bench"
 if [ "$counts" = 1 ]; then
   "$root/tools/setup.sh" valgrind
   "$root/tools/build.sh" release >/dev/null
-  l1d=$(getconf LEVEL1_DCACHE_SIZE); l1d_ways=$(getconf LEVEL1_DCACHE_ASSOC)
-  l2=$(getconf LEVEL2_CACHE_SIZE); l2_ways=$(getconf LEVEL2_CACHE_ASSOC)
-  caches=(--D1="${l1d:-49152},${l1d_ways:-12},64" --LL="${l2:-1048576},${l2_ways:-8},64")
+  # A cache parameter as getconf reads it, or the development machine's where it reads none.
+  cache() { local v; v=$(getconf "$1" 2>/dev/null || true); [[ $v =~ ^[1-9][0-9]*$ ]] && echo "$v" || echo "$2"; }
+  caches=(--D1="$(cache LEVEL1_DCACHE_SIZE 49152),$(cache LEVEL1_DCACHE_ASSOC 12),64"
+          --LL="$(cache LEVEL2_CACHE_SIZE 1048576),$(cache LEVEL2_CACHE_ASSOC 8),64")
   work=$(mktemp -d)
   trap 'rm -rf "$work"' EXIT
   echo "per collision (cachegrind ${caches[*]}): instructions, L1d misses, L2 misses"
   for n in $sizes; do
     for c in 200000 400000; do
-      valgrind --tool=cachegrind --cache-sim=yes "${caches[@]}" --cachegrind-out-file="$work/cg.$c" \
-        "$bench" --particles "$n" --host fixed --collisions "$c" >"$work/out.$c" 2>/dev/null
+      if ! valgrind --tool=cachegrind --cache-sim=yes "${caches[@]}" --cachegrind-out-file="$work/cg.$c" \
+        "$bench" --particles "$n" --host fixed --collisions "$c" >"$work/out.$c" 2>"$work/err.$c"; then
+        echo "tools/bench-hard.sh --counts: cachegrind failed at N = $n, $c collisions:" >&2
+        cat "$work/err.$c" >&2
+        exit 1
+      fi
     done
     # summary: Ir I1mr ILmr Dr D1mr DLmr Dw D1mw DLmw
     awk -v n="$n" '

@@ -21,11 +21,13 @@ using namespace pdamp;
 
 namespace {
 
-/// The pdamp executable started with arguments, its output captured in files.
+/// An executable (pdamp unless named) started with arguments, its output captured in files.
 class Process {
  public:
-  Process(const std::vector<std::string>& args, const test::TempDir& dir) : out_(dir / "stdout"), err_(dir / "stderr") {
-    std::vector<std::string> all{PDAMP_EXECUTABLE};
+  Process(const std::vector<std::string>& args, const test::TempDir& dir) : Process(PDAMP_EXECUTABLE, args, dir) {}
+  Process(const std::string& executable, const std::vector<std::string>& args, const test::TempDir& dir)
+      : out_(dir / "stdout"), err_(dir / "stderr") {
+    std::vector<std::string> all{executable};
     all.insert(all.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (auto& a : all) argv.push_back(a.data());
@@ -63,8 +65,9 @@ struct Result {
   std::string out, err;
 };
 
-Result pdamp_cli(const std::vector<std::string>& args, const test::TempDir& dir) {
-  Process p(args, dir);
+Result pdamp_cli(const std::vector<std::string>& args, const test::TempDir& dir,
+                 const std::string& executable = PDAMP_EXECUTABLE) {
+  Process p(executable, args, dir);
   const int code = p.wait();
   return {code, p.out(), p.err()};
 }
@@ -175,6 +178,25 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
     CHECK(r.err.find(c.expected) != std::string::npos);
   }
   CHECK_FALSE(std::filesystem::exists(db));
+}
+
+TEST_CASE("the hard engine's benchmark refuses bad options with code 2, naming the option and what is valid") {
+  test::TempDir dir("bench-bad");
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
+      {{"--particles", "abc"}, "('abc') for option '--particles' is invalid"},
+      {{"--particles", "1"}, "--particles 1: must be from 2 to 10000000"},
+      {{"--host", "wobbly"}, "--host 'wobbly': must be fixed or free"},
+      {{"--packing", "0.8"}, "--packing 0.800000: must be above 0 and below 0.74"},
+      {{"--collisions", "0"}, "--collisions 0: must be at least 1"},
+      {{"--frobnicate", "1"}, "unrecognised option '--frobnicate'"},
+      {{"--packing", "0.6"}, "at most 978 spheres"},  // the placement's own refusal
+  };
+  for (const auto& [args, expected] : cases) {
+    CAPTURE(expected);
+    const Result r = pdamp_cli(args, dir, PDAMP_BENCH_EXECUTABLE);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(expected) != std::string::npos);
+  }
 }
 
 TEST_CASE("runs, show, check, keys and version") {

@@ -14,12 +14,14 @@
 /// accelerating cap lose energy, which the ledger books).
 #include <sys/resource.h>
 
+#include <boost/program_options.hpp>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "pdamp/errors.hpp"
@@ -46,29 +48,59 @@ std::int64_t statistic(const Engine& engine, const std::string& name) {
 
 double total_energy(const Engine& engine) { return engine.observe().energy.stored_J(); }
 
-[[noreturn]] void usage() {
-  std::fputs("usage: pdamp_bench [--particles N] [--collisions C] [--host fixed|free] [--packing PHI]\n", stderr);
-  std::exit(2);
+struct Options {
+  int n = 1000;
+  long collisions = 0;  ///< 0: 20 N, at least 10^6
+  bool free_host = false;
+  double packing = 0.3;
+};
+
+/// The options, or an exit with status 2 and a message naming the option, the value and
+/// what is valid.
+Options parse_options(int argc, char** argv) {
+  namespace po = boost::program_options;
+  Options o;
+  std::string host = "fixed";
+  po::options_description options("pdamp_bench");
+  options.add_options()("help", "this text")("particles", po::value(&o.n)->default_value(o.n), "spheres, 2 to 10^7")(
+      "collisions", po::value(&o.collisions), "collisions timed, >= 1 (default 20 N, at least 10^6)")(
+      "host", po::value(&host)->default_value(host), "fixed or free")(
+      "packing", po::value(&o.packing)->default_value(o.packing), "solid fraction, above 0 and below 0.74");
+  const auto refuse = [&](const std::string& why) {
+    std::fprintf(stderr, "pdamp_bench: %s\n", why.c_str());
+    std::exit(2);
+  };
+  try {
+    po::variables_map vm;
+    po::store(po::parse_command_line(argc, argv, options), vm);
+    po::notify(vm);
+    if (vm.count("help")) {
+      std::ostringstream text;
+      text << options;
+      std::fputs(text.str().c_str(), stdout);
+      std::exit(0);
+    }
+    if (vm.count("collisions") && o.collisions < 1) {
+      refuse("--collisions " + std::to_string(o.collisions) + ": must be at least 1");
+    }
+  } catch (const po::error& e) {
+    refuse(std::string(e.what()) + " (pdamp_bench --help lists the options)");
+  }
+  if (o.n < 2 || o.n > 10'000'000) refuse("--particles " + std::to_string(o.n) + ": must be from 2 to 10000000");
+  if (host != "fixed" && host != "free") refuse("--host '" + host + "': must be fixed or free");
+  // Densest packing: π / √18. (The placement says so if it cannot place them that densely.)
+  if (!(o.packing > 0.0 && o.packing < 0.74)) {
+    refuse("--packing " + std::to_string(o.packing) + ": must be above 0 and below 0.74");
+  }
+  o.free_host = host == "free";
+  if (o.collisions == 0) o.collisions = std::max(20L * o.n, 1000000L);
+  return o;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  int n = 1000;
-  long collisions = 0;
-  bool free_host = false;
-  double packing = 0.3;
-  for (int a = 1; a < argc; ++a) {
-    const std::string arg = argv[a];
-    if (a + 1 >= argc) usage();
-    const std::string value = argv[++a];
-    if (arg == "--particles") n = std::stoi(value);
-    else if (arg == "--collisions") collisions = std::stol(value);
-    else if (arg == "--host") free_host = value == "free";
-    else if (arg == "--packing") packing = std::stod(value);
-    else usage();
-  }
-  if (collisions == 0) collisions = std::max(20L * n, 1000000L);
+  const auto [n, collisions, free_host, packing] = parse_options(argc, argv);
 
   const double d = 0.001;
   const double volume = n * std::numbers::pi / 6 * d * d * d / packing;
@@ -129,6 +161,9 @@ int main(int argc, char** argv) {
         static_cast<long long>(statistic(engine, "near_sweeps")),
         1024.0 * static_cast<double>(rss_after - rss_before) / n, std::abs(total_energy(engine) - e0) / e0,
         engine.observe().energy.balance_relative_error(e0));
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pdamp_bench: %s\n", e.what());
     return 1;

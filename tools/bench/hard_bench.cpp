@@ -65,7 +65,7 @@ Options parse_options(int argc, char** argv) {
   options.add_options()("help", "this text")("particles", po::value(&o.n)->default_value(o.n), "spheres, 2 to 10^7")(
       "collisions", po::value(&o.collisions), "collisions timed, >= 1 (default 20 N, at least 10^6)")(
       "host", po::value(&host)->default_value(host), "fixed or free")(
-      "packing", po::value(&o.packing)->default_value(o.packing), "solid fraction, above 0 and below 0.74");
+      "packing", po::value(&o.packing)->default_value(o.packing, "0.3"), "solid fraction, above 0 and below 0.74");
   const auto refuse = [&](const std::string& why) {
     std::fprintf(stderr, "pdamp_bench: %s\n", why.c_str());
     std::exit(2);

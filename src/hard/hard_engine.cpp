@@ -269,11 +269,7 @@ double HardEngine::max_overlap_m() const {
 inline bool HardEngine::is_current(const Event& e) const {
   if (e.kind == EventKind::bed_release) return host_epoch_ == e.count_j;
   // Where count_j came from, chosen without a jump table (its jumps mispredict).
-  constexpr unsigned host_stamped = 1u << static_cast<unsigned>(EventKind::bottom_cap) |
-                                    1u << static_cast<unsigned>(EventKind::top_cap) |
-                                    1u << static_cast<unsigned>(EventKind::rider) |
-                                    1u << static_cast<unsigned>(EventKind::host_margin);
-  const bool stamped = (host_stamped >> static_cast<unsigned>(e.kind)) & 1u;
+  const bool stamped = carries_host_stamp(e.kind);
   // Both read whatever the kind, then one chosen, without branches (the kinds of
   // successive events are a coin toss); j of another kind may be no sphere: clamped.
   const auto last = static_cast<std::uint32_t>(trajectory_counter_.size() - 1);
@@ -286,6 +282,9 @@ inline bool HardEngine::is_current(const Event& e) const {
 }
 
 void HardEngine::predict(int i, std::span<const int> new_cells) {
+  // Whatever host-dependent event i had is replaced; before anything is entered, which
+  // keeps a list refilled after a trajectory change fresh (EventQueue::host_stamp_changed).
+  replace_host_events(i);
   const double t = t_s_;
   const Ballistic f = flight(i);
   const Eigen::Vector3d x = f.position_at(t, gravity_m_s2_), v = f.velocity_at(t, gravity_m_s2_);
@@ -313,13 +312,16 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
                                       c.iy < grid_.ny() - 1 ? xy.to_upper[1] : never,
                                       to_lower_z[0],
                                       to_upper_z[0]};
-  // The earliest face, the first of equals; none if all are `never`. Without branches:
-  // which face comes first is a coin toss (a minimum, then the faces that equal it).
+  // The earliest face, the first of equals; none if all are `never`. Without branches
+  // (a minimum, and the index by a mask): which face comes first is a coin toss.
   double crossing = to_face[0];
-  for (int k = 1; k < 6; ++k) crossing = to_face[k] < crossing ? to_face[k] : crossing;
-  unsigned earliest = 0;
-  for (int k = 0; k < 6; ++k) earliest |= static_cast<unsigned>(to_face[k] == crossing) << k;
-  const int face = crossing < never ? std::countr_zero(earliest) : -1;
+  int earliest = 0;
+  for (int k = 1; k < 6; ++k) {
+    const int sooner = -static_cast<int>(to_face[k] < crossing);
+    earliest += (k - earliest) & sooner;
+    crossing = std::min(crossing, to_face[k]);
+  }
+  const int face = crossing < never ? earliest : -1;
   const double horizon = t + crossing;
   sphere_[i].t_cross_s = horizon;
   if (face >= 0) push({horizon, i, face, 0, EventKind::cell_crossing});
@@ -353,7 +355,6 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
   // Caps and the resting bed: a guard from the host's speed envelope (when the sphere
   // could reach the bed's farthest extent if the host moved at the envelope's speed),
   // or exact predictions.
-  ++sphere_[i].host_stamp;  // whatever host-dependent event i had is replaced
   const double guard = t + std::min(to_lower_z[1], to_upper_z[1]);
   if (guard <= t) {
     tiers_[0].members.insert(i);
@@ -367,7 +368,7 @@ void HardEngine::predict(int i, std::span<const int> new_cells) {
 void HardEngine::predict_host_relative(int i, std::size_t first_level) {
   const double t = t_s_;
   const double horizon = sphere_[i].t_cross_s;
-  const std::uint32_t stamp = ++sphere_[i].host_stamp;
+  const std::uint32_t stamp = replace_host_events(i);
   // Down the tiers while the sphere is within each one's margin.
   for (std::size_t level = first_level; level < tiers_.size(); ++level) {
     const double end = std::min(horizon, t + tiers_[level].horizon_s);
@@ -444,8 +445,7 @@ bool HardEngine::defer_touching(int i, double velocity_change_m_s) {
   if (!(std::min(clearance, riders) - deviation > contact_tolerance_m_)) return false;
   if (b.direction == 0 && b.event_s < sphere_[i].t_cross_s) {
     // Its contact (if any) is no longer exact: a margin event at the same time re-predicts it.
-    push({b.event_s, i, static_cast<std::int32_t>(tiers_.size() - 1), ++sphere_[i].host_stamp,
-          EventKind::host_margin});
+    push({b.event_s, i, static_cast<std::int32_t>(tiers_.size() - 1), replace_host_events(i), EventKind::host_margin});
   }
   b.deviation_m = deviation;
   b.direction = direction;

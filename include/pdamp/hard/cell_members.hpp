@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstring>
 #include <span>
 #include <vector>
@@ -92,20 +93,22 @@ class CellMembers {
   std::size_t cells_bytes() const { return cells_.size() * sizeof(Cell); }
   /// The members of the `cell_count` cells `cells` written one after another to `out`
   /// (room for all of them and copy_width more), and how many there are. Unrolled, and
-  /// without looking at a cell's count but to add it: the rare cell with overflow members
-  /// sends the whole gather down copy_members' path instead.
+  /// without looking at a cell's count but to add it and to OR it into the others' (which
+  /// has bits beyond the inline capacity's if any count exceeds it): the rare cell with
+  /// overflow members sends the whole gather down copy_members' path instead.
   template <int cell_count>
   int gather(const int* cells, int* out) const {
+    static_assert(std::has_single_bit(static_cast<unsigned>(inline_capacity) + 1));
     int count = 0;
-    bool overflow = false;
+    int counts_or = 0;
 #pragma GCC unroll 27
     for (int k = 0; k < cell_count; ++k) {
       const Cell& c = cells_[cells[k]];
       std::memcpy(out + count, &c, sizeof(Cell));
       count += c.count;
-      overflow |= c.count > inline_capacity;
+      counts_or |= c.count;
     }
-    if (overflow) {
+    if (counts_or > inline_capacity) {
       count = 0;
       for (int k = 0; k < cell_count; ++k) count += copy_members(cells[k], out + count);
     }

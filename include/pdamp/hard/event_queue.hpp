@@ -8,7 +8,10 @@
 /// - when a sphere's trajectory changes, its own events are forgotten at once
 ///   (`forget`), without touching the order until the next look at the top;
 /// - an owner's list is pruned of out-of-date events whenever it is re-keyed, so an
-///   event voided by its partner usually leaves without ever reaching the top.
+///   event voided by its partner usually leaves without ever reaching the top. Not a
+///   fresh list, though (one refilled since its owner's trajectory changed, with no
+///   trajectory or host stamp changed since: most re-keys, those of a collision's two
+///   spheres): its events are known current, and asking would cost a load per event.
 /// An event is thus always of its owner's current trajectory; it still carries the
 /// partner's counter (or stamp) it was predicted with, and one whose partner changed after
 /// its owner was last re-keyed still reaches the top and is dropped there
@@ -62,6 +65,16 @@ struct Event {
   EventKind kind;
 };
 
+/// Whether an event's count_j is its sphere's host stamp (see Event::count_j).
+/// A mask, not a chain of comparisons: the kinds of successive events are a coin toss.
+constexpr bool carries_host_stamp(EventKind kind) {
+  constexpr unsigned stamped = 1u << static_cast<unsigned>(EventKind::bottom_cap) |
+                               1u << static_cast<unsigned>(EventKind::top_cap) |
+                               1u << static_cast<unsigned>(EventKind::rider) |
+                               1u << static_cast<unsigned>(EventKind::host_margin);
+  return (stamped >> static_cast<unsigned>(kind)) & 1u;
+}
+
 /// The order of events at one time, by kind, then particle, then partner, packed into one
 /// number (i + 1 and j below 2^28, see EventQueue::max_particles).
 inline std::uint64_t tie_key(const Event& e) {
@@ -92,16 +105,26 @@ class EventQueue {
     const int owner = owner_of(event);
     lists_[owner].push_back(Stored::of(event));
     mark_dirty(owner);
+    fresh_filled_ |= keyed_[owner].fresh;
   }
-  /// Drops every event predicted for sphere i (its trajectory changed).
+  /// Drops every event predicted for sphere i (its trajectory changed). Other owners'
+  /// events with i for partner may now be out of date.
   void forget(int i) {
+    // Rare: a collision changes both trajectories before it predicts either.
+    if (fresh_filled_) [[unlikely]] stale_fresh_lists();
     lists_[i].clear();
     mark_dirty(i);
+    keyed_[i].fresh = 1;
+  }
+  /// Sphere i's host stamp changed: its events that carry the stamp are out of date.
+  void host_stamp_changed(int i) {
+    if (!lists_[i].empty()) keyed_[i].fresh = 0;
   }
   void clear() {
     for (auto& list : lists_) list.clear();
     for (Keyed& k : keyed_) k = Keyed{.version = k.version + 1};
     dirty_.clear();
+    fresh_filled_ = 0;
     std::fill(buckets_.begin(), buckets_.end(), none);
     current_.clear();
     beyond_.clear();
@@ -114,6 +137,7 @@ class EventQueue {
   const Event* top(Current current) {
     for (const int owner : dirty_) rekey(owner, current);
     dirty_.clear();
+    fresh_filled_ = 0;
     for (;;) {
       while (!current_.empty() && !is_keyed(current_.top())) current_.pop();
       if (!current_.empty()) break;
@@ -179,6 +203,9 @@ class EventQueue {
     std::uint32_t slot = 0;     ///< its bucket's slot (place bucket)
     Place place = Place::none;
     std::uint8_t dirty = 0;     ///< re-key at the next top()
+    /// Every event in the owner's list was entered since its trajectory last changed, and
+    /// nothing any of them depends on has changed since: re-keying need not look at them.
+    std::uint8_t fresh = 0;
   };
   static_assert(sizeof(Keyed) == 32);
   /// An owner's neighbours in its bucket's list (place bucket).
@@ -199,16 +226,26 @@ class EventQueue {
     if (!keyed_[owner].dirty) dirty_.push_back(owner);
     keyed_[owner].dirty = 1;
   }
+  /// No list refilled since its owner's trajectory changed can be vouched for any more.
+  [[gnu::cold, gnu::noinline]] void stale_fresh_lists() {
+    for (const int owner : dirty_) keyed_[owner].fresh = 0;
+    fresh_filled_ = 0;
+  }
   bool is_keyed(const Entry& e) const { return keyed_[e.owner].version == e.version; }
 
   template <class Current>
   void rekey(int owner, Current current) {
     Keyed& keyed = keyed_[owner];
     keyed.dirty = 0;
+    const bool fresh = keyed.fresh;
+    keyed.fresh = 0;  // events entered from now on join older ones
     std::vector<Stored>& list = lists_[owner];
     std::size_t best = 0;
     for (std::size_t k = 0; k < list.size();) {
-      if (!current(event_of(owner, list[k]))) {
+#ifndef NDEBUG
+      if (fresh && !current(event_of(owner, list[k]))) throw std::logic_error("an event of a fresh list is out of date");
+#endif
+      if (!fresh && !current(event_of(owner, list[k]))) {
         list[k] = list.back();
         list.pop_back();
         continue;
@@ -350,6 +387,7 @@ class EventQueue {
   std::vector<Keyed> keyed_;
   std::vector<Link> links_;
   std::vector<int> dirty_;                ///< owners whose events changed since the last top()
+  std::uint8_t fresh_filled_ = 0;         ///< an event was entered in a fresh list since the last top()
   /// The first owner in each later bucket's list (its slot: the bucket modulo their number).
   std::vector<std::int32_t> buckets_;
   Heap current_;  ///< entries of the current bucket (and any earlier: see enter)

@@ -100,6 +100,11 @@ class HardEngine final : public Engine {
 
   // Prediction.
   void push(const Event& event) { queue_.push(event); }
+  /// Whatever host-dependent event sphere i had is replaced: returns its new host stamp.
+  std::uint32_t replace_host_events(int i) {
+    queue_.host_stamp_changed(i);
+    return ++sphere_[i].host_stamp;
+  }
   /// Predicts every event of free sphere i anew (its trajectory changed).
   void predict(int i) {
     Around around;

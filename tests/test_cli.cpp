@@ -199,6 +199,27 @@ TEST_CASE("the hard engine's benchmark refuses bad options with code 2, naming t
   }
 }
 
+TEST_CASE("the hard engine's benchmark times a small gas and says what the run was given of its core") {
+  test::TempDir dir("bench-small");
+  const Result r = pdamp_cli({"--particles", "100", "--collisions", "2000"}, dir, PDAMP_BENCH_EXECUTABLE);
+  REQUIRE(r.code == 0);
+  CAPTURE(r.out);
+  // The number after `label` on the benchmark's line.
+  const auto figure = [&](const std::string& label) {
+    const auto at = r.out.find(label);
+    REQUIRE(at != std::string::npos);
+    return std::stod(r.out.substr(at + label.size()));
+  };
+  CHECK(figure("collisions ") >= 2000);
+  CHECK(figure("energy change ") < 1e-12);  // elastic, frictionless, fixed walls
+  CHECK(figure("collisions/s ") > 0);
+  // The core probe: a clock any core runs at, and a median share at least the lowest.
+  CHECK(figure("clock ") > 0.1);
+  CHECK(figure("clock ") < 10.0);
+  CHECK(figure("lowest ") > 0.0);
+  CHECK(figure("core share ") >= figure("lowest "));
+}
+
 TEST_CASE("runs, show, check, keys and version") {
   test::TempDir dir("cli-list");
   const auto db = (dir / "runs.sqlite").string();

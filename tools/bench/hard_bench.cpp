@@ -9,11 +9,14 @@
 /// collision an impulse on the host and shows what those cost as N grows. After a
 /// warm-up of N collisions it times C collisions (default 20 N, at least 10^6) and prints
 /// one line: collisions/s, events/s, the host-impulse counters, memory per sphere, the
-/// relative change of the stored energy (for the fixed host: the conservation error) and
-/// the ledger's balance error (for the free host, spheres that come to rest on an
-/// accelerating cap lose energy, which the ledger books).
+/// relative change of the stored energy (for the fixed host: the conservation error), the
+/// ledger's balance error (for the free host, spheres that come to rest on an
+/// accelerating cap lose energy, which the ledger books), and what the run was given of
+/// its core: the clock and the share of the core's issue slots (median and lowest; see
+/// core_probe.hpp).
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <boost/program_options.hpp>
 #include <chrono>
 #include <cmath>
@@ -23,7 +26,9 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "core_probe.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/placement.hpp"
@@ -47,6 +52,11 @@ std::int64_t statistic(const Engine& engine, const std::string& name) {
 }
 
 double total_energy(const Engine& engine) { return engine.observe().energy.stored_J(); }
+
+double median(std::vector<double> values) {
+  std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+  return values[values.size() / 2];
+}
 
 struct Options {
   int n = 1000;
@@ -136,9 +146,25 @@ int main(int argc, char** argv) {
     for (const auto& [name, value] : start_stats) {
       if (name.rfind("events_", 0) == 0) start_events += value;
     }
-    const auto wall_start = std::chrono::steady_clock::now();
-    while (engine.collisions() - start_collisions < collisions) engine.advance_to(t += chunk);
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    // Timed in 200 slices, with what the run is given of its core (core_probe.hpp) probed
+    // before, between and after them, outside the timed intervals. Always 201 probes:
+    // `tools/bench-hard.sh --counts` subtracts two runs' instructions, theirs with them.
+    constexpr int slices = 200;
+    std::vector<double> clock_GHz, core_share;
+    const auto probe = [&] {
+      const bench::CoreProbe now = bench::probe_core();
+      clock_GHz.push_back(now.clock_GHz);
+      core_share.push_back(now.share);
+    };
+    probe();
+    double wall = 0.0;
+    for (int slice = 1; slice <= slices; ++slice) {
+      const std::int64_t until = start_collisions + collisions * slice / slices;
+      const auto slice_start = std::chrono::steady_clock::now();
+      while (engine.collisions() < until) engine.advance_to(t += chunk);
+      wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - slice_start).count();
+      probe();
+    }
     std::int64_t events = -start_events;
     for (const auto& [name, value] : engine.statistics()) {
       if (name.rfind("events_", 0) == 0) events += value;
@@ -153,14 +179,16 @@ int main(int argc, char** argv) {
     std::printf(
         "particles %7d  host %-5s  cavity D=H=%.4f m  collisions %10.0f  wall %8.3f s  collisions/s %.3e  "
         "events/s %.3e  stale/event %.2f  host impulses %.0f  re-predictions per impulse %.2f  near sweeps %lld  "
-        "bytes/sphere %.0f  energy change %.1e  balance error %.1e\n",
+        "bytes/sphere %.0f  energy change %.1e  balance error %.1e  clock %.2f GHz  "
+        "core share %.2f (lowest %.2f)\n",
         n, free_host ? "free" : "fixed", diameter, done, wall, done / wall, static_cast<double>(events) / wall,
         static_cast<double>(statistic(engine, "events_stale")) / static_cast<double>(events + start_events),
         impulses,
         impulses > 0 ? repredictions / impulses : 0.0,
         static_cast<long long>(statistic(engine, "near_sweeps")),
         1024.0 * static_cast<double>(rss_after - rss_before) / n, std::abs(total_energy(engine) - e0) / e0,
-        engine.observe().energy.balance_relative_error(e0));
+        engine.observe().energy.balance_relative_error(e0), median(clock_GHz), median(core_share),
+        *std::min_element(core_share.begin(), core_share.end()));
   } catch (const InputError& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;

@@ -172,15 +172,15 @@ Observation HardEngine::observe() const {
   o.t_s = t_s_;
   o.host = host_.at(t_s_);
   EnergyLedger& e = o.energy;
+  ParticleEnergySums sums;
   for (Eigen::Index i = 0; i < particles_.size(); ++i) {
     const int k = static_cast<int>(i);
-    const double m = particles_.mass_kg[i];
     const Eigen::Vector3d v =
         sphere_[k].riding ? Eigen::Vector3d(o.host.v_m_s * e_z) : flight(k).velocity_at(t_s_, gravity_m_s2_);
-    e.particle_translational_J += 0.5 * m * v.squaredNorm();
-    e.particle_rotational_J += 0.5 * particles_.moment_of_inertia(i) * particles_.angular_velocity_rad_s.col(i).squaredNorm();
-    e.gravitational_potential_J -= m * gravity_m_s2_.dot(position_now(k, o.host));
+    sums.add(particles_.mass_kg[i], particles_.moment_of_inertia(i), position_now(k, o.host), v,
+             particles_.angular_velocity_rad_s.col(i), gravity_m_s2_);
   }
+  sums.write_to(e);
   e.host_counts = !host_model_.has_infinite_mass();
   e.host_kinetic_J = 0.5 * host_model_.mass_kg() * o.host.v_m_s * o.host.v_m_s;
   e.spring_potential_J = host_model_.spring_energy_J(t_s_, o.host.z_m);

@@ -737,12 +737,18 @@ double SoftEngine::host_acceleration_m_s2() const {
   return (host_other_force_N_ + host_particle_force_N_) / host_model_.mass_kg();
 }
 
-double SoftEngine::particle_kinetic_J() const {
-  double kinetic = 0.0;
+ParticleEnergySums SoftEngine::particle_energies() const {
+  ParticleEnergySums sums;
   for (int i = 0; i < sphere_count(); ++i) {
-    kinetic += 0.5 * mass_[i] * v_.vector(i).squaredNorm() + 0.5 * w_.vector(i).squaredNorm() / w_[i].inverse_inertia;
+    sums.add(mass_[i], 1.0 / w_[i].inverse_inertia, balls_.vector(i), v_.vector(i), w_.vector(i),
+             scenario_.gravity_m_s2);
   }
-  return kinetic;
+  return sums;
+}
+
+double SoftEngine::particle_kinetic_J() const {
+  const ParticleEnergySums sums = particle_energies();
+  return sums.translational_J() + sums.rotational_J();
 }
 
 Observation SoftEngine::observe() const {
@@ -750,11 +756,7 @@ Observation SoftEngine::observe() const {
   o.t_s = t_s_;
   o.host = host_;
   o.energy = ledger_;
-  for (int i = 0; i < sphere_count(); ++i) {
-    o.energy.particle_translational_J += 0.5 * mass_[i] * v_.vector(i).squaredNorm();
-    o.energy.particle_rotational_J += 0.5 * w_.vector(i).squaredNorm() / w_[i].inverse_inertia;
-    o.energy.gravitational_potential_J -= mass_[i] * scenario_.gravity_m_s2.dot(balls_.vector(i));
-  }
+  particle_energies().write_to(o.energy);
   o.energy.host_kinetic_J = 0.5 * host_model_.mass_kg() * host_.v_m_s * host_.v_m_s;
   o.energy.spring_potential_J = host_model_.spring_energy_J(t_s_, host_.z_m);
   o.energy.contact_elastic_J = contact_elastic_J_;

@@ -73,6 +73,9 @@ class HardEngine final : public Engine {
   /// Overlaps never exceed this (m): the contact tolerance of the root finders plus round-off.
   double overlap_tolerance_m() const { return 10.0 * contact_tolerance_m_; }
   int riding_count() const { return riding_count_; }
+  /// Whether the engine asks for neighbours' records and cells ahead of use: where they
+  /// outgrow half the L2 cache (see prefetch_records_ and prefetch_cells_).
+  bool prefetching() const { return prefetch_records_ && prefetch_cells_; }
   /// Collisions processed so far (all kinds).
   std::int64_t collisions() const;
 

@@ -4,8 +4,7 @@
 /// stored energies and D the cumulative dissipation by mechanism.
 
 #include <Eigen/Core>
-
-#include "pdamp/model/particles.hpp"
+#include <cmath>
 
 namespace pdamp {
 
@@ -40,12 +39,47 @@ struct EnergyLedger {
   double balance_relative_error(double initial_stored_J) const;
 };
 
-struct ParticleEnergies {
-  double translational_J = 0.0;
-  double rotational_J = 0.0;
-  double gravitational_J = 0.0;
+/// A sum of many terms, exact to about one rounding of the total (Neumaier's compensated
+/// summation). A ledger adds up every sphere's energies, and a plain sum of 10^5 similar
+/// terms can be off by 10^-12 of itself (each addition rounds to the growing total's
+/// last bit), more than an engine's own error: the hard gas of 10^5 spheres conserves its
+/// energy to 4·10^-16, which a plain sum reported as 1.6·10^-12.
+class CompensatedSum {
+ public:
+  CompensatedSum& operator+=(double term) {
+    const double sum = sum_ + term;
+    // The part of the smaller operand that the rounded sum lost.
+    compensation_ += std::abs(sum_) >= std::abs(term) ? (sum_ - sum) + term : (term - sum) + sum_;
+    sum_ = sum;
+    return *this;
+  }
+  double value() const { return sum_ + compensation_; }
+
+ private:
+  double sum_ = 0.0;
+  double compensation_ = 0.0;
 };
 
-ParticleEnergies particle_energies(const Particles& particles, const Eigen::Vector3d& gravity_m_s2);
+/// The particles' part of a ledger, summed sphere by sphere (both engines' observe()).
+class ParticleEnergySums {
+ public:
+  /// Adds a sphere of mass m and moment of inertia I at x moving at v, spinning at w.
+  void add(double mass_kg, double inertia_kg_m2, const Eigen::Vector3d& position_m, const Eigen::Vector3d& velocity_m_s,
+           const Eigen::Vector3d& angular_velocity_rad_s, const Eigen::Vector3d& gravity_m_s2) {
+    translational_J_ += 0.5 * mass_kg * velocity_m_s.squaredNorm();
+    rotational_J_ += 0.5 * inertia_kg_m2 * angular_velocity_rad_s.squaredNorm();
+    gravitational_J_ += -mass_kg * gravity_m_s2.dot(position_m);
+  }
+  double translational_J() const { return translational_J_.value(); }
+  double rotational_J() const { return rotational_J_.value(); }
+  void write_to(EnergyLedger& ledger) const {
+    ledger.particle_translational_J = translational_J();
+    ledger.particle_rotational_J = rotational_J();
+    ledger.gravitational_potential_J = gravitational_J_.value();
+  }
+
+ private:
+  CompensatedSum translational_J_, rotational_J_, gravitational_J_;
+};
 
 }  // namespace pdamp

@@ -52,6 +52,8 @@ class SoftEngine final : public Engine {
   SimdPath simd_path() const { return simd_path_; }
 
  private:
+  /// The particles' energies, each summed sphere by sphere (observe, particle_kinetic_J).
+  ParticleEnergySums particle_energies() const;
   // The phases of a velocity-Verlet step (advance_to strings them together).
   double next_step_s(double t_s);
   void move(double kick_s, double dt_s);

@@ -97,8 +97,6 @@ Particles jammable_cluster(const std::vector<Eigen::Vector3d>& sites, const Eige
   return p;
 }
 
-}  // namespace
-
 /// The benchmark's gas (pdamp_bench): n elastic, frictionless spheres of 1 mm, no gravity,
 /// in a closed cylinder, D = H, at solid fraction 0.3.
 Scenario benchmark_gas(int n) {
@@ -108,6 +106,8 @@ Scenario benchmark_gas(int n) {
                      "\n[particles]\ncount = " + std::to_string(n) + "\ndiameter_m = 0.001\ndensity_kg_m3 = 8000\n"
                      "[hard]\nen = 1\nmu = 0\n[hard_wall]\nen = 1\nmu = 0\n");
 }
+
+}  // namespace
 
 TEST_CASE("elastic frictionless gas at solid fraction 0.3: energy conserved to 1e-12 over 10^7 collisions, Maxwell-Boltzmann velocities") {
   // The conservation target on the benchmark's gas, 1,000 spheres all at one

@@ -8,27 +8,6 @@
 
 using namespace pdamp;
 
-namespace {
-
-/// The 1D Hertz-dashpot impact, m* δ'' = −max(0, k δ^{3/2} + c δ'), integrated with RK4 at
-/// a far finer step: the rebound speed ratio.
-double reference_restitution(double effective_mass, double kn, double cn, double speed) {
-  const double dt = 2e-9;
-  double delta = 0.0, rate = speed;
-  auto accel = [&](double d, double r) { return -std::max(0.0, kn * std::pow(std::max(d, 0.0), 1.5) + cn * r) / effective_mass; };
-  do {
-    const double k1d = rate, k1r = accel(delta, rate);
-    const double k2d = rate + 0.5 * dt * k1r, k2r = accel(delta + 0.5 * dt * k1d, k2d);
-    const double k3d = rate + 0.5 * dt * k2r, k3r = accel(delta + 0.5 * dt * k2d, k3d);
-    const double k4d = rate + dt * k3r, k4r = accel(delta + dt * k3d, k4d);
-    delta += dt / 6 * (k1d + 2 * k2d + 2 * k3d + k4d);
-    rate += dt / 6 * (k1r + 2 * k2r + 2 * k3r + k4r);
-  } while (delta > 0.0);
-  return -rate / speed;
-}
-
-}  // namespace
-
 TEST_CASE("calibration: e_n(v) of the soft law, sphere-sphere and sphere-wall, against the exact impact") {
   const Scenario s = load_scenario(test::scenario_file("table1"));
   const RestitutionTable table = calibrate_restitution(s, 7);
@@ -38,8 +17,11 @@ TEST_CASE("calibration: e_n(v) of the soft law, sphere-sphere and sphere-wall, a
   for (std::size_t k = 0; k < 7; ++k) {
     const double v = table.sphere_sphere.impact_speed_m_s[k];
     CAPTURE(v);
-    CHECK(table.sphere_sphere.en[k] == doctest::Approx(reference_restitution(m / 2, 3.6e5, 0.01, v)).epsilon(2e-3));
-    CHECK(table.sphere_wall.en[k] == doctest::Approx(reference_restitution(m, 3.6e5, 0.01, v)).epsilon(2e-3));
+    const double reference_dt_s = 2e-9;
+    const double pair = test::reference_hertz_impact(m / 2, 3.6e5, 0.01, v, reference_dt_s).restitution;
+    const double wall = test::reference_hertz_impact(m, 3.6e5, 0.01, v, reference_dt_s).restitution;
+    CHECK(table.sphere_sphere.en[k] == doctest::Approx(pair).epsilon(2e-3));
+    CHECK(table.sphere_wall.en[k] == doctest::Approx(wall).epsilon(2e-3));
     // The paper's stiff tangential spring rings many times in a contact and its dashpot
     // damps it: sticking impacts leave almost no tangential rebound.
     CHECK(std::abs(table.sphere_sphere.beta0[k]) < 0.25);

@@ -34,23 +34,8 @@ SoftEngineOptions held() {
   return o;
 }
 
-/// The 1D Hertz-dashpot impact m* δ'' = −max(0, k δ^{3/2} + c δ'), integrated with RK4 at
-/// a step far below the engine's: returns the rebound speed ratio and the contact time.
-std::pair<double, double> reference_impact(double effective_mass, double kn, double cn, double speed) {
-  const double dt = 1e-10;
-  double delta = 0.0, rate = speed, t = 0.0;
-  auto accel = [&](double d, double r) { return -std::max(0.0, kn * std::pow(std::max(d, 0.0), 1.5) + cn * r) / effective_mass; };
-  do {
-    const double k1d = rate, k1r = accel(delta, rate);
-    const double k2d = rate + 0.5 * dt * k1r, k2r = accel(delta + 0.5 * dt * k1d, k2d);
-    const double k3d = rate + 0.5 * dt * k2r, k3r = accel(delta + 0.5 * dt * k2d, k3d);
-    const double k4d = rate + dt * k3r, k4r = accel(delta + dt * k3d, k4d);
-    delta += dt / 6 * (k1d + 2 * k2d + 2 * k3d + k4d);
-    rate += dt / 6 * (k1r + 2 * k2r + 2 * k3r + k4r);
-    t += dt;
-  } while (delta > 0.0);
-  return {-rate / speed, t};
-}
+/// The reference impacts' step, far below the engine's.
+constexpr double reference_dt_s = 1e-10;
 
 struct Impact {
   double restitution, contact_time_s;
@@ -80,7 +65,7 @@ TEST_CASE("a sphere dropped on a fixed floor rebounds as the Hertz-dashpot solut
     CAPTURE(speed);
     const Scenario s = scenario_from(wide_cavity, {"particles.count=1"});
     const double m = 9000 * 4.0 / 3.0 * std::numbers::pi * 1.25e-10;
-    const auto [e_exact, tc_exact] = reference_impact(m, 3.6e5, 0.01, speed);
+    const auto [e_exact, tc_exact] = test::reference_hertz_impact(m, 3.6e5, 0.01, speed, reference_dt_s);
     const Impact impact = drop_on_floor(s, speed);
     CHECK(impact.restitution == doctest::Approx(e_exact).epsilon(2e-3));
     // The engine sees the contact at whole steps: its duration is within a step of the exact one.
@@ -96,7 +81,8 @@ TEST_CASE("an elastic Hertz impact lasts 2.9432 delta_max / v and returns all it
   const Impact impact = drop_on_floor(s, speed);
   CHECK(impact.restitution == doctest::Approx(1.0).epsilon(1e-4));
   CHECK(impact.contact_time_s == doctest::Approx(hertz_contact_time_s(m, 3.6e5, speed)).epsilon(0.03));
-  CHECK(hertz_contact_time_s(m, 3.6e5, speed) == doctest::Approx(reference_impact(m, 3.6e5, 0.0, speed).second).epsilon(1e-4));
+  const double exact_s = test::reference_hertz_impact(m, 3.6e5, 0.0, speed, reference_dt_s).contact_time_s;
+  CHECK(hertz_contact_time_s(m, 3.6e5, speed) == doctest::Approx(exact_s).epsilon(1e-4));
 }
 
 namespace {

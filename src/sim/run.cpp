@@ -45,7 +45,7 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
     outcome.initial_energy_J = now.energy.stored_J();
     auto record = [&](bool is_sample) {
       const double error = now.energy.balance_relative_error(outcome.initial_energy_J);
-      outcome.max_energy_balance_rel_err = std::max(outcome.max_energy_balance_rel_err, error);
+      outcome.energy_balance_rel_err = std::max(outcome.energy_balance_rel_err, error);
       if (const auto cycle = cycles.feed(now)) {
         recorder.record_cycle(*cycle);
         ++outcome.cycles;

@@ -37,9 +37,7 @@ StoredRun run_and_store(RunStore& store, Model model, const Scenario& scenario, 
   getrusage(RUSAGE_SELF, &usage);
   statistics.emplace_back("peak_memory_kB", usage.ru_maxrss);
   store.save_statistics(result.run_id, statistics);
-  const RunOutcome& o = result.outcome;
-  store.finish_run(result.run_id, {o.status, o.message, o.sim_time_s, o.wall_time_s, o.initial_energy_J,
-                                   o.max_energy_balance_rel_err});
+  store.finish_run(result.run_id, result.outcome);
   return result;
 }
 

@@ -19,13 +19,8 @@ struct RunControl {
   std::function<void(double t_s)> progress;  ///< called about twice a second of wall time
 };
 
-struct RunOutcome {
-  RunStatus status = RunStatus::completed;
-  std::string message;
-  double sim_time_s = 0.0;
-  double wall_time_s = 0.0;
-  double initial_energy_J = 0.0;
-  double max_energy_balance_rel_err = 0.0;
+/// How the run ended, as the store keeps it, and what it recorded.
+struct RunOutcome : RunEnd {
   int samples = 0;
   int cycles = 0;
 };

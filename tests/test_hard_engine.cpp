@@ -10,6 +10,7 @@
 #include <numbers>
 #include <random>
 
+#include "benchmark_gas.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/run.hpp"
@@ -97,15 +98,8 @@ Particles jammable_cluster(const std::vector<Eigen::Vector3d>& sites, const Eige
   return p;
 }
 
-/// The benchmark's gas (pdamp_bench): n elastic, frictionless spheres of 1 mm, no gravity,
-/// in a closed cylinder, D = H, at solid fraction 0.3.
-Scenario benchmark_gas(int n) {
-  const double volume_m3 = n * std::numbers::pi / 6 * 1e-9 / 0.3;
-  const std::string size = std::to_string(std::cbrt(4 * volume_m3 / std::numbers::pi));
-  return fixed_walls("[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = " + size + "\nheight_m = " + size +
-                     "\n[particles]\ncount = " + std::to_string(n) + "\ndiameter_m = 0.001\ndensity_kg_m3 = 8000\n"
-                     "[hard]\nen = 1\nmu = 0\n[hard_wall]\nen = 1\nmu = 0\n");
-}
+/// The benchmark's gas (pdamp_bench) at solid fraction 0.3, with fixed walls.
+Scenario benchmark_gas(int n) { return bench::benchmark_gas(n, 0.3, false); }
 
 }  // namespace
 

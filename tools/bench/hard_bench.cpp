@@ -22,17 +22,16 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <numbers>
 #include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "benchmark_gas.hpp"
 #include "core_probe.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/placement.hpp"
-#include "pdamp/scenario/scenario_loader.hpp"
 
 using namespace pdamp;
 
@@ -112,20 +111,8 @@ Options parse_options(int argc, char** argv) {
 int main(int argc, char** argv) {
   const auto [n, collisions, free_host, packing] = parse_options(argc, argv);
 
-  const double d = 0.001;
-  const double volume = n * std::numbers::pi / 6 * d * d * d / packing;
-  const double diameter = std::cbrt(4 * volume / std::numbers::pi);
-  const double host_mass = 10.0 * n * 8000 * std::numbers::pi / 6 * d * d * d;
-  const double host_stiffness = host_mass * std::pow(2 * std::numbers::pi * 20.0, 2);
-  std::string text = "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = " + std::to_string(diameter) +
-                     "\nheight_m = " + std::to_string(diameter) + "\n[particles]\ncount = " + std::to_string(n) +
-                     "\ndiameter_m = 0.001\ndensity_kg_m3 = 8000\n[hard]\nen = 1\nmu = 0\n[hard_wall]\nen = 1\nmu = 0\n";
-  text += free_host ? "[host]\nz0_m = 0\ndamping_N_s_m = 0\nmass_kg = " + std::to_string(host_mass) +
-                          "\nstiffness_N_m = " + std::to_string(host_stiffness) + "\n"
-                    : "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 1\n";
   try {
-    Scenario scenario = parse_scenario(text, "bench", "pdamp_bench");
-    if (!free_host) scenario.excitation.amplitude_m = 0.0;  // fixed walls
+    const Scenario scenario = bench::benchmark_gas(n, packing, free_host);
     Particles spheres = place_particles(scenario.particles, scenario.cavity, 0.0);
     std::mt19937_64 rng(1);
     std::normal_distribution<double> component(0.0, 1.0 / std::sqrt(3.0));
@@ -136,7 +123,7 @@ int main(int argc, char** argv) {
     hard::HardEngine engine(scenario, spheres);
     const double e0 = total_energy(engine);
     // Chunks of simulated time that hold about N/4 collisions each.
-    const double mean_free_time = d / (6 * std::sqrt(2.0) * packing * 1.0);
+    const double mean_free_time = bench::gas_sphere_diameter_m / (6 * std::sqrt(2.0) * packing * 1.0);
     const double chunk = 0.5 * mean_free_time;
     double t = 0.0;
     while (engine.collisions() < n) engine.advance_to(t += chunk);
@@ -181,7 +168,7 @@ int main(int argc, char** argv) {
         "events/s %.3e  stale/event %.2f  host impulses %.0f  re-predictions per impulse %.2f  near sweeps %lld  "
         "bytes/sphere %.0f  energy change %.1e  balance error %.1e  clock %.2f GHz  "
         "core share %.2f (lowest %.2f)\n",
-        n, free_host ? "free" : "fixed", diameter, done, wall, done / wall, static_cast<double>(events) / wall,
+        n, free_host ? "free" : "fixed", scenario.cavity.diameter_m, done, wall, done / wall, static_cast<double>(events) / wall,
         static_cast<double>(statistic(engine, "events_stale")) / static_cast<double>(events + start_events),
         impulses,
         impulses > 0 ? repredictions / impulses : 0.0,

@@ -49,5 +49,6 @@ TEST_CASE("calibration: a frictionless, undamped law restitutes fully") {
 TEST_CASE("calibration: a law that cannot stop the scenario's fastest impact says so and what to use instead") {
   // Table 4 at 500 Hz from 10 mm: impacts up to ~63 m/s, which the paper's k_n lets through.
   const Scenario s = load_scenario(test::scenario_file("table4_f500"));
-  CHECK_THROWS_WITH_AS(calibrate_restitution(s, 3), doctest::Contains("use [hard] restitution = constant"), RuntimeFailure);
+  CHECK_THROWS_WITH_AS(calibrate_restitution(s, 3), doctest::Contains("use [hard] restitution = constant"),
+                       RuntimeFailure);
 }

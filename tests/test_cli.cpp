@@ -1,7 +1,7 @@
 /// End-to-end tests of the pdamp executable: scenario -> run -> store -> query.
 #include <doctest/doctest.h>
-#include <signal.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 
@@ -88,8 +88,8 @@ TEST_CASE("host alone, both models: the stored free decay is the exact Table 1 s
     CAPTURE(model);
     test::TempDir dir("cli-host-" + model);
     const auto db = dir / "runs.sqlite";
-    const Result r = pdamp_cli({"run", "--scenario", table1(), "--model", model, "--set", "particles.count=0",
-                                "--db", db.string(), "--duration", "1.0"},
+    const Result r = pdamp_cli({"run", "--scenario", table1(), "--model", model, "--set", "particles.count=0", "--db",
+                                db.string(), "--duration", "1.0"},
                                dir);
     INFO(r.err);
     REQUIRE(r.code == 0);
@@ -136,13 +136,16 @@ TEST_CASE("pdamp run --model hard on small.ini: completed, balanced to 1e-9, eve
   CHECK(run.column_double(0) <= 1e-9);
   CHECK(run.column_double(1) == 0.3);
   CHECK(run.column_int(2) >= 4);
-  for (const char* name : {"events_sphere_sphere", "events_wall", "events_cap", "events_cell_crossing", "events_stale"}) {
+  for (const char* name :
+       {"events_sphere_sphere", "events_wall", "events_cap", "events_cell_crossing", "events_stale"}) {
     CAPTURE(name);
-    CHECK(count_rows(db, "SELECT value FROM run_statistics WHERE run_id = 1 AND name = '" + std::string(name) + "'") > 0);
+    CHECK(count_rows(db, "SELECT value FROM run_statistics WHERE run_id = 1 AND name = '" + std::string(name) + "'") >
+          0);
   }
   CHECK(count_rows(db, "SELECT count(*) FROM samples WHERE run_id = 1") == 601);
   // The fill: 100 spheres of 1.5 mm in a 12 mm x 10 mm hole.
-  sqlite::Statement fill(d, "SELECT solid_fraction, impact_share + friction_share + viscous_share FROM energy_partition WHERE run_id = 1");
+  sqlite::Statement fill(
+      d, "SELECT solid_fraction, impact_share + friction_share + viscous_share FROM energy_partition WHERE run_id = 1");
   REQUIRE(fill.step());
   CHECK(fill.column_double(0) == doctest::Approx(100 * 0.75 * 0.75 * 0.75 * 4.0 / 3.0 / (6.0 * 6.0 * 10.0)));
   CHECK(fill.column_double(1) == doctest::Approx(1.0));
@@ -161,8 +164,7 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
       {{"run", "--scenario", table1(), "--model", "squishy", "--db", db.string()}, "--model 'squishy'"},
       {{"run", "--scenario", "/no/such.ini", "--model", "hard", "--db", db.string()}, "/no/such.ini"},
       {{"run", "--model", "hard", "--db", db.string()}, "--scenario is required"},
-      {{"run", "--scenario", table1(), "--model", "soft", "--duration", "-1", "--db", db.string()},
-       "run.duration_s"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--duration", "-1", "--db", db.string()}, "run.duration_s"},
       {{"run", "--scenario", table1(), "--model", "soft", "--bogus", "--db", db.string()}, "bogus"},
       {{"frobnicate"}, "unknown command"},
       {{"show", "abc", "--db", db.string()}, "RUN_ID 'abc'"},
@@ -253,7 +255,8 @@ Process start_endless_run(const test::TempDir& dir, const std::filesystem::path&
   for (int i = 0; i < 200; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     // The file appears before its schema does: wait for the samples table, then for samples.
-    if (!std::filesystem::exists(db) || count_rows(db, "SELECT count(*) FROM sqlite_master WHERE name = 'samples'") == 0) {
+    if (!std::filesystem::exists(db) ||
+        count_rows(db, "SELECT count(*) FROM sqlite_master WHERE name = 'samples'") == 0) {
       continue;
     }
     if (count_rows(db, "SELECT count(*) FROM samples") > 1000) break;

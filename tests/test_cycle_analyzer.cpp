@@ -20,7 +20,8 @@ struct DampedOscillation {
     o.host.z_m = offset + z0 * e * (std::cos(wd * t) + alpha / wd * std::sin(wd * t));
     o.host.v_m_s = -z0 * e * (alpha * alpha + wd * wd) / wd * std::sin(wd * t);
     const double k = mass * (alpha * alpha + wd * wd);
-    const double energy = 0.5 * mass * o.host.v_m_s * o.host.v_m_s + 0.5 * k * (o.host.z_m - offset) * (o.host.z_m - offset);
+    const double energy =
+        0.5 * mass * o.host.v_m_s * o.host.v_m_s + 0.5 * k * (o.host.z_m - offset) * (o.host.z_m - offset);
     o.energy.dissipated_viscous_J = 0.5 * k * z0 * z0 - energy;
     return o;
   }

@@ -34,7 +34,8 @@ TEST_CASE("particle energy sums: translational, rotational and gravitational par
   ParticleEnergySums sums;
   const Eigen::Vector3d g(0.0, 0.0, -9.81);
   sums.add(2.0, 0.5, Eigen::Vector3d(0.0, 0.0, 0.3), Eigen::Vector3d(1.0, 2.0, 2.0), Eigen::Vector3d(0.0, 4.0, 0.0), g);
-  sums.add(1.0, 0.25, Eigen::Vector3d(1.0, 0.0, -0.1), Eigen::Vector3d(0.0, 0.0, -3.0), Eigen::Vector3d(2.0, 0.0, 0.0), g);
+  sums.add(1.0, 0.25, Eigen::Vector3d(1.0, 0.0, -0.1), Eigen::Vector3d(0.0, 0.0, -3.0), Eigen::Vector3d(2.0, 0.0, 0.0),
+           g);
   EnergyLedger ledger;
   sums.write_to(ledger);
   CHECK(ledger.particle_translational_J == doctest::Approx(0.5 * 2.0 * 9.0 + 0.5 * 1.0 * 9.0));

@@ -6,9 +6,9 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
-#include <string>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "pdamp/hard/collision_rules.hpp"
 #include "pdamp/hard/event_prediction.hpp"
@@ -50,7 +50,8 @@ TEST_CASE("Walton: an oblique frictionless impact is normal, the limit of the sl
   const Eigen::Vector3d u = u_n * n + Eigen::Vector3d(0.3, 0.4, -0.1);  // slip of either sign along n's plane
   // A sphere on a sphere, and a sphere on a light host (whose vertical mobility couples
   // the tangential direction into the normal one).
-  for (const Mobility& k : {sphere_mobility(m) + sphere_mobility(2 * m), sphere_mobility(m) + Mobility{0, 0, 1 / (5 * m)}}) {
+  for (const Mobility& k :
+       {sphere_mobility(m) + sphere_mobility(2 * m), sphere_mobility(m) + Mobility{0, 0, 1 / (5 * m)}}) {
     const CollisionOutcome out = walton_collision(u, n, u_n, k, law(e, 0.0, 0.35));
     CHECK(!out.sticking);
     CHECK(out.impulse_N_s.cross(n).norm() <= 1e-15 * out.impulse_N_s.norm());
@@ -178,8 +179,8 @@ TEST_CASE("straight-line and quadratic event times") {
   CHECK(time_to_close(1.0, -2.0, 0.0) == doctest::Approx(0.5));
   CHECK(time_to_close(1.0, 0.0, -2.0) == doctest::Approx(1.0));
   CHECK(time_to_close(1.0, 1.0, 0.0) == never);
-  CHECK(time_to_close(1.0, -1.0, 4.0) == never);  // turns back before reaching the plane
-  CHECK(time_to_close(-1e-18, -1.0, 0.0) == 0.0);  // round-off past the plane counts as touching
+  CHECK(time_to_close(1.0, -1.0, 4.0) == never);                 // turns back before reaching the plane
+  CHECK(time_to_close(-1e-18, -1.0, 0.0) == 0.0);                // round-off past the plane counts as touching
   CHECK(time_to_close(0.0, 2.0, -1.0) == doctest::Approx(4.0));  // leaves and falls back
   const double s = sphere_sphere_time(Eigen::Vector3d(3, 0, 0), Eigen::Vector3d(-1, 0, 0), 1.0);
   CHECK(s == doctest::Approx(2.0));
@@ -368,8 +369,7 @@ TEST_CASE("grazing: a path that just misses the floor is not a contact, one that
   const double r = 5e-4, tolerance = 1e-14, v = 0.3, g = 9.81, approach_depth = v * v / (2 * g);
   for (const double minimum_gap : {3 * tolerance, 0.5 * tolerance, -0.5 * tolerance}) {
     const Ballistic flight{Eigen::Vector3d(0, 0, r + approach_depth + minimum_gap), Eigen::Vector3d(0, 0, -v), 0.0};
-    const Approach found =
-        cap_contact(flight, r, false, 0.01, host, host.at(0.0), s.gravity_m_s2, 0.0, 0.1, tolerance);
+    const Approach found = cap_contact(flight, r, false, 0.01, host, host.at(0.0), s.gravity_m_s2, 0.0, 0.1, tolerance);
     CAPTURE(minimum_gap);
     CHECK(found.contact == (minimum_gap <= tolerance));
     if (found.contact) CHECK(found.t_s == doctest::Approx(v / g).epsilon(1e-3));

@@ -11,10 +11,10 @@
 #include <random>
 
 #include "benchmark_gas.hpp"
+#include "pdamp/errors.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/run.hpp"
-#include "pdamp/errors.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;
@@ -31,9 +31,7 @@ Scenario fixed_walls(const std::string& text) {
 
 /// Spheres placed by the shared placement, with random velocities of one speed and random spins.
 /// The shared placement, with the cavity where the host starts.
-Particles placed(const Scenario& s) {
-  return place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m);
-}
+Particles placed(const Scenario& s) { return place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m); }
 
 Particles moving_spheres(const Scenario& s, double speed_m_s, double spin_rad_s, std::uint64_t seed) {
   Particles p = placed(s);
@@ -73,9 +71,8 @@ std::vector<Eigen::Vector3d> fcc_sites_nearest_origin(int count, double r) {
       }
     }
   }
-  std::stable_sort(sites.begin(), sites.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    return a.norm() < b.norm() - 1e-12;
-  });
+  std::stable_sort(sites.begin(), sites.end(),
+                   [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.norm() < b.norm() - 1e-12; });
   sites.resize(static_cast<std::size_t>(count));
   return sites;
 }
@@ -103,7 +100,9 @@ Scenario benchmark_gas(int n) { return bench::benchmark_gas(n, 0.3, false); }
 
 }  // namespace
 
-TEST_CASE("elastic frictionless gas at solid fraction 0.3: energy conserved to 1e-12 over 10^7 collisions, Maxwell-Boltzmann velocities") {
+TEST_CASE(
+    "elastic frictionless gas at solid fraction 0.3: energy conserved to 1e-12 over 10^7 collisions, Maxwell-Boltzmann "
+    "velocities") {
   // The issue's conservation target on the benchmark's gas, 1,000 spheres all at one
   // speed to start.
   const Scenario s = benchmark_gas(1000);
@@ -198,7 +197,8 @@ TEST_CASE("vertical momentum of spheres and host is conserved by every kind of c
   auto momentum = [&] {
     const State st = engine.state();
     double p = s.host.mass_kg * st.observation.host.v_m_s;
-    for (Eigen::Index i = 0; i < st.particles.size(); ++i) p += st.particles.mass_kg[i] * st.particles.velocity_m_s(2, i);
+    for (Eigen::Index i = 0; i < st.particles.size(); ++i)
+      p += st.particles.mass_kg[i] * st.particles.velocity_m_s(2, i);
     return p;
   };
   const double p0 = momentum();
@@ -214,8 +214,9 @@ TEST_CASE("vertical momentum of spheres and host is conserved by every kind of c
 }
 
 TEST_CASE("angular momentum about the origin is conserved by a frictional sphere-sphere collision") {
-  Scenario s = fixed_walls("[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n"
-                           "[particles]\ncount = 2\ndiameter_m = 0.001\n[hard]\nen = 0.6\nmu = 0.3\nbeta0 = 0.4\n");
+  Scenario s = fixed_walls(
+      "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n"
+      "[particles]\ncount = 2\ndiameter_m = 0.001\n[hard]\nen = 0.6\nmu = 0.3\nbeta0 = 0.4\n");
   Particles p(2);
   for (int i = 0; i < 2; ++i) {
     p.radius_m[i] = 0.0005;
@@ -279,10 +280,10 @@ struct BouncingBall {
   Scenario scenario;
   BouncingBall(double gamma, double frequency_hz, double height_m) {
     const double w = 2 * std::numbers::pi * frequency_hz;
-    scenario = test::scenario_from("[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = " +
-                                   std::to_string(frequency_hz) +
-                                   "\n[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 1\n"
-                                   "diameter_m = 0.002\n[hard_wall]\nen = 0.3\n");
+    scenario = test::scenario_from(
+        "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = " + std::to_string(frequency_hz) +
+        "\n[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 1\n"
+        "diameter_m = 0.002\n[hard_wall]\nen = 0.3\n");
     scenario.excitation.amplitude_m = gamma * 9.81 / (w * w);
     drop_height_m = height_m;
   }
@@ -331,7 +332,9 @@ TEST_CASE("resting: just above Gamma = 1 the ball lifts off the floor every cycl
   CHECK(calm.riding_count() == 1);
 }
 
-TEST_CASE("resting: a settled bed under Gamma < 1 rides with the host, which rings at sqrt(K/(M+m_p))/2pi, and a 10 s decay finishes") {
+TEST_CASE(
+    "resting: a settled bed under Gamma < 1 rides with the host, which rings at sqrt(K/(M+m_p))/2pi, and a 10 s decay "
+    "finishes") {
   // 60 spheres (7.7 g) on the Table 1 host released from z0 = 0.5 mm: Gamma = z0 K/(M g) = 0.64.
   const Scenario s = test::scenario_from(
       "[host]\nz0_m = 0.0005\n[cavity]\ndiameter_m = 0.012\nheight_m = 0.01\n"
@@ -409,10 +412,10 @@ TEST_CASE("a host impulse cannot drive a cap into a sphere that touches it while
   const double r = 0.00075;
   Particles p(2);
   for (int i = 0; i < 2; ++i) p.radius_m[i] = r, p.mass_kg[i] = 1.6e-5;
-  p.position_m.col(0) = Eigen::Vector3d(-0.002, 0, r);  // A: touching the floor
-  p.velocity_m_s.col(0) = Eigen::Vector3d(0, 0, 0.1);   // the floor's velocity
+  p.position_m.col(0) = Eigen::Vector3d(-0.002, 0, r);                // A: touching the floor
+  p.velocity_m_s.col(0) = Eigen::Vector3d(0, 0, 0.1);                 // the floor's velocity
   p.position_m.col(1) = Eigen::Vector3d(0.002, 0, 0.006 - r - 2e-5);  // B: 20 um below the top cap
-  p.velocity_m_s.col(1) = Eigen::Vector3d(0, 0, 0.15);                 // closing at 0.05 m/s
+  p.velocity_m_s.col(1) = Eigen::Vector3d(0, 0, 0.15);                // closing at 0.05 m/s
   HardEngine engine(s, p);
   for (int k = 1; k <= 200; ++k) {
     engine.advance_to(5e-6 * k);
@@ -421,7 +424,8 @@ TEST_CASE("a host impulse cannot drive a cap into a sphere that touches it while
   CHECK(test::statistic(engine, "events_cap") >= 2);  // B on the top cap, then the floor catches A
 }
 
-TEST_CASE("touching spheres keep their predictions through host impulses that move the walls away, and nothing overlaps") {
+TEST_CASE(
+    "touching spheres keep their predictions through host impulses that move the walls away, and nothing overlaps") {
   // The small damper: spheres raining on the riding bed push the host down at most
   // impulses, which moves the floor and the bed away from the spheres touching them; those
   // predictions stand as lower bounds (touching_deferrals) instead of being redone. A
@@ -438,14 +442,17 @@ TEST_CASE("touching spheres keep their predictions through host impulses that mo
   CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
 }
 
-TEST_CASE("jam: a heavy sphere driven into a touching cluster in flight merges the wedged spheres instead of colliding without end") {
+TEST_CASE(
+    "jam: a heavy sphere driven into a touching cluster in flight merges the wedged spheres instead of colliding "
+    "without end") {
   // 54 touching spheres (the sites of a face-centred cubic packing nearest its centre),
   // spinning at ~3000 rad/s, and a 1000 times heavier sphere driven into them at 3 m/s,
   // like a cap into a dense bed: the pairwise collisions through the touching cluster
   // converge ever more slowly (300 000 of them before the jam rule); jammed spheres merge
   // into a rigid body instead. No gravity, walls out of reach.
-  const Scenario s = fixed_walls("[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.05\nheight_m = 0.05\n"
-                                 "[particles]\ncount = 55\ndiameter_m = 0.0012\n[hard]\nen = 0.154\nmu = 0.55\nbeta0 = 0.35\n");
+  const Scenario s = fixed_walls(
+      "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.05\nheight_m = 0.05\n"
+      "[particles]\ncount = 55\ndiameter_m = 0.0012\n[hard]\nen = 0.154\nmu = 0.55\nbeta0 = 0.35\n");
   const std::vector<Eigen::Vector3d> sites = fcc_sites_nearest_origin(55, jam_radius_m);
   Particles p = jammable_cluster(sites, Eigen::Vector3d(0, 0, 0.025));
   p.velocity_m_s.col(54) = -3.0 * sites[54].normalized();
@@ -508,7 +515,8 @@ TEST_CASE("jam: a cluster driven against the side wall sticks to the host instea
   CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
   // The heavy sphere is stopped against the wedged spheres.
   const State end = engine.state();
-  const Eigen::Vector3d relative = end.particles.velocity_m_s.col(54) - end.observation.host.v_m_s * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d relative =
+      end.particles.velocity_m_s.col(54) - end.observation.host.v_m_s * Eigen::Vector3d::UnitZ();
   CHECK(relative.norm() <= 1e-4 * 3.0);
 }
 

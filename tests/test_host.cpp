@@ -64,7 +64,8 @@ TEST_CASE("the closed form agrees with RK4 on the host ODE for every mode and da
       {"base motion", "[excitation]\nmode = base\namplitude_m = 0.002\nfrequency_hz = 13\nphase_rad = 0.4\n"},
       {"force", "[excitation]\nmode = force\nforce_N = 0.7\nfrequency_hz = 25\nphase_rad = -1\n"},
       {"force near resonance", "[excitation]\nmode = force\nforce_N = 0.7\nfrequency_hz = 17.7\n"},
-      {"over-damped base motion", "[host]\ndamping_N_s_m = 30\n[excitation]\nmode = base\namplitude_m = 0.002\nfrequency_hz = 40\n"},
+      {"over-damped base motion",
+       "[host]\ndamping_N_s_m = 30\n[excitation]\nmode = base\namplitude_m = 0.002\nfrequency_hz = 40\n"},
   };
   for (const auto& c : cases) {
     CAPTURE(c.name);
@@ -87,8 +88,7 @@ TEST_CASE("the closed form agrees with RK4 on the host ODE for every mode and da
 }
 
 TEST_CASE("restarting the trajectory from any of its own states changes nothing") {
-  const Scenario s = scenario_from(host_only +
-                                   "[excitation]\nmode = base\namplitude_m = 0.002\nfrequency_hz = 13\n");
+  const Scenario s = scenario_from(host_only + "[excitation]\nmode = base\namplitude_m = 0.002\nfrequency_hz = 13\n");
   const HostModel model(s);
   const HostTrajectory first(model, 0.0, model.initial_state());
   const HostTrajectory restarted(model, 0.23, first.at(0.23));
@@ -99,8 +99,8 @@ TEST_CASE("restarting the trajectory from any of its own states changes nothing"
 }
 
 TEST_CASE("forced steady state has the textbook amplitude") {
-  const Scenario s = scenario_from(host_only +
-                                   "[host]\nz0_m = 0\n[excitation]\nmode = force\nforce_N = 0.5\nfrequency_hz = 20\n");
+  const Scenario s =
+      scenario_from(host_only + "[host]\nz0_m = 0\n[excitation]\nmode = force\nforce_N = 0.5\nfrequency_hz = 20\n");
   const HostModel model(s);
   const HostTrajectory trajectory(model, 0.0, model.initial_state());
   const double w = 2 * std::numbers::pi * 20;
@@ -158,7 +158,8 @@ TEST_CASE("speed, acceleration and jerk bounds hold for every later time") {
       max_speed = std::max(max_speed, std::abs(trajectory.at(t).v_m_s));
       max_accel = std::max(max_accel, std::abs(trajectory.acceleration_m_s2(t)));
       // The mean jerk over a step never exceeds the largest jerk inside it.
-      max_jerk = std::max(max_jerk, std::abs(trajectory.acceleration_m_s2(t + dt) - trajectory.acceleration_m_s2(t)) / dt);
+      max_jerk =
+          std::max(max_jerk, std::abs(trajectory.acceleration_m_s2(t + dt) - trajectory.acceleration_m_s2(t)) / dt);
     }
     CHECK(max_speed <= trajectory.speed_bound_m_s());
     CHECK(max_accel <= trajectory.acceleration_bound_m_s2());
@@ -171,8 +172,8 @@ TEST_CASE("speed, acceleration and jerk bounds hold for every later time") {
 }
 
 TEST_CASE("a prescribed host follows A sin(wt + phi) exactly") {
-  const Scenario s = scenario_from(host_only +
-                                   "[excitation]\nmode = prescribed\namplitude_m = 0.002\nfrequency_hz = 60\nphase_rad = 0.5\n");
+  const Scenario s = scenario_from(
+      host_only + "[excitation]\nmode = prescribed\namplitude_m = 0.002\nfrequency_hz = 60\nphase_rad = 0.5\n");
   const HostModel model(s);
   const HostTrajectory trajectory(model, 0.0, model.initial_state());
   const double w = 2 * std::numbers::pi * 60;

@@ -142,7 +142,8 @@ PairOutcome collide(Model model, const Eigen::Vector3d& relative_velocity) {
   engine->advance_to(0.002);  // a few microseconds of contact; 1 mm of flight after it
   const Particles p = engine->state().particles;
   REQUIRE(engine->observe().counters.contacts == 0);
-  return {{p.velocity_m_s.col(0), p.velocity_m_s.col(1)}, {p.angular_velocity_rad_s.col(0), p.angular_velocity_rad_s.col(1)}};
+  return {{p.velocity_m_s.col(0), p.velocity_m_s.col(1)},
+          {p.angular_velocity_rad_s.col(0), p.angular_velocity_rad_s.col(1)}};
 }
 
 }  // namespace
@@ -199,7 +200,8 @@ TEST_CASE_TEMPLATE("a sphere on a harmonically forced floor: the momentum it exc
   const Scenario s = test::scenario_from(
       "[host]\nmass_kg = 0.001\nstiffness_N_m = 1e-15\ndamping_N_s_m = 0\nz0_m = 0\n"
       "[excitation]\nmode = force\nforce_N = 0.02943\nfrequency_hz = 30\n"
-      "[cavity]\ndiameter_m = 0.01\nheight_m = 0.006\n[particles]\ncount = 1\ndiameter_m = 0.003\ndensity_kg_m3 = 9000\n");
+      "[cavity]\ndiameter_m = 0.01\nheight_m = 0.006\n[particles]\ncount = 1\ndiameter_m = 0.003\ndensity_kg_m3 = "
+      "9000\n");
   const Particles ball = test::spheres({{0.001, 0, 0.003}}, {{0.05, 0, -0.2}}, 0.0015, lead_kg_m3);
   auto engine = make_engine(M::model, s, ball, nullptr);
   const double m = ball.mass_kg[0], w = s.excitation.angular_frequency_rad_s(), f0 = s.excitation.force_N;
@@ -303,7 +305,9 @@ Ensemble run_ensemble(Model model, const Scenario& s, const Particles& settled, 
 
 }  // namespace
 
-TEST_CASE("a small damper (100 spheres, 0.3 s): both models take the same energy out, within the soft model's own k_n sensitivity") {
+TEST_CASE(
+    "a small damper (100 spheres, 0.3 s): both models take the same energy out, within the soft model's own k_n "
+    "sensitivity") {
   // Both models start from one settled bed; the hard one uses the calibrated e_n(v), beta0(v).
   // Isolated impacts then agree to the calibration's accuracy (tests above). What the hard
   // model cannot represent is a contact that lasts: the paper's k_n is far softer than lead
@@ -313,8 +317,10 @@ TEST_CASE("a small damper (100 spheres, 0.3 s): both models take the same energy
   // agrees with itself when its k_n is stiffened ten times (calibration following). We allow
   // twice that change: one decade to reach a stiffer soft model, one more towards the limit.
   const Scenario small = load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated"});
-  const Scenario stiffer = load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated", "soft.kn_N_m1_5=3.6e6"});
-  const Particles bed = soft::settle_bed(small, place_particles(small.particles, small.cavity, small.host.z0_m)).particles;
+  const Scenario stiffer =
+      load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated", "soft.kn_N_m1_5=3.6e6"});
+  const Particles bed =
+      soft::settle_bed(small, place_particles(small.particles, small.cavity, small.host.z0_m)).particles;
   const int members = 4;
   const Ensemble soft = run_ensemble(Model::soft, small, bed, members);
   const Ensemble hard = run_ensemble(Model::hard, small, bed, members);
@@ -338,7 +344,8 @@ TEST_CASE("a small damper (100 spheres, 0.3 s): both models take the same energy
   REQUIRE(hard.psi.size() == soft.psi.size());
   REQUIRE(soft_stiffer.psi.size() == soft.psi.size());
   for (std::size_t k = 1; k < soft.psi.size(); ++k) {
-    const double cycle_sensitivity = std::max(std::abs(soft_stiffer.psi[k] - soft.psi[k]), sensitivity * soft.psi_particles[k]);
+    const double cycle_sensitivity =
+        std::max(std::abs(soft_stiffer.psi[k] - soft.psi[k]), sensitivity * soft.psi_particles[k]);
     const double scatter = 2 * std::sqrt(hard.psi_variance_of_mean[k] + soft.psi_variance_of_mean[k]);
     CAPTURE(k);
     CAPTURE(scatter);
@@ -354,16 +361,20 @@ TEST_CASE("where the models must disagree: a dense slug lands, the hard model ta
   // effect", Luding et al., Phys. Rev. E 50, 4113, 1994), where the hard model resolves it
   // as a cascade of binary collisions, each losing (1 - e_n^2) of its normal energy. So the
   // hard model dissipates more by impact in the first cycle, whatever the soft k_n.
-  const Scenario small = load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated", "run.duration_s=0.06"});
-  const Particles bed = soft::settle_bed(small, place_particles(small.particles, small.cavity, small.host.z0_m)).particles;
+  const Scenario small =
+      load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated", "run.duration_s=0.06"});
+  const Particles bed =
+      soft::settle_bed(small, place_particles(small.particles, small.cavity, small.host.z0_m)).particles;
   for (const char* kn : {"soft.kn_N_m1_5=3.6e5", "soft.kn_N_m1_5=3.6e6"}) {
     CAPTURE(kn);
-    const Scenario s = load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated", "run.duration_s=0.06", kn});
+    const Scenario s =
+        load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated", "run.duration_s=0.06", kn});
     const RestitutionTable table = calibrate_restitution(s);
     auto soft = make_engine(Model::soft, s, bed, &table), hard = make_engine(Model::hard, s, bed, &table);
     soft->advance_to(s.run.duration_s);
     hard->advance_to(s.run.duration_s);
-    const double soft_impact = soft->observe().energy.dissipated_impact_J, hard_impact = hard->observe().energy.dissipated_impact_J;
+    const double soft_impact = soft->observe().energy.dissipated_impact_J,
+                 hard_impact = hard->observe().energy.dissipated_impact_J;
     CAPTURE(soft_impact);
     CAPTURE(hard_impact);
     CHECK(hard_impact > soft_impact);
@@ -404,10 +415,12 @@ Ringing ring(Model model, const Scenario& s, const Particles& bed, double from_s
 TEST_CASE("where the models must disagree: a bed resting in the host under Gamma < 1") {
   // 60 spheres (7.7 g) settled on the Table 1 host, released from z0 = 0.5 mm: Gamma = 0.64.
   const std::string text =
-      "[host]\nz0_m = 0.0005\n[cavity]\ndiameter_m = 0.012\nheight_m = 0.01\n[particles]\ncount = 60\ndiameter_m = 0.0015\n";
+      "[host]\nz0_m = 0.0005\n[cavity]\ndiameter_m = 0.012\nheight_m = 0.01\n[particles]\ncount = 60\ndiameter_m = "
+      "0.0015\n";
   const Scenario s = test::scenario_from(text);
   const Particles bed = soft::settle_bed(s, place_particles(s.particles, s.cavity, s.host.z0_m)).particles;
-  const double rigid_hz = std::sqrt(s.host.stiffness_N_m / (s.host.mass_kg + bed.total_mass_kg())) / (2 * std::numbers::pi);
+  const double rigid_hz =
+      std::sqrt(s.host.stiffness_N_m / (s.host.mass_kg + bed.total_mass_kg())) / (2 * std::numbers::pi);
 
   SUBCASE("the soft bed's contact dashpots keep dissipating; the hard bed rides as rigid added mass") {
     // In the hard model the resting spheres ride with the host: no relative motion, no
@@ -426,7 +439,8 @@ TEST_CASE("where the models must disagree: a bed resting in the host under Gamma
     // the host feels more than the bed's mass, and rings below the rigid-bed frequency
     // sqrt(K / (M + m_p)) / 2 pi that the hard model gives.
     const Scenario soft_contacts = test::scenario_from(text + "[soft]\nkn_N_m1_5 = 360\n");
-    const Particles soft_bed = soft::settle_bed(soft_contacts, place_particles(s.particles, s.cavity, s.host.z0_m)).particles;
+    const Particles soft_bed =
+        soft::settle_bed(soft_contacts, place_particles(s.particles, s.cavity, s.host.z0_m)).particles;
     const Ringing soft = ring(Model::soft, soft_contacts, soft_bed, 0.3, 1.0);
     const Ringing stiff = ring(Model::soft, s, bed, 0.3, 1.0);
     const Ringing hard = ring(Model::hard, soft_contacts, soft_bed, 0.3, 1.0);

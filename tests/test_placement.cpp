@@ -63,9 +63,9 @@ TEST_CASE("overlapping spheres are separated from each other and from the walls"
   Particles p(3);
   p.radius_m.setConstant(0.0005);
   p.mass_kg.setConstant(1e-6);
-  p.position_m.col(0) << 0.0, 0.0, 0.0005 - 3e-6;    // into the floor
-  p.position_m.col(1) << 0.00099, 0.0, 0.0005;       // 10 um into sphere 0
-  p.position_m.col(2) << 0.00099, 0.00099, 0.0005;   // and into sphere 1
+  p.position_m.col(0) << 0.0, 0.0, 0.0005 - 3e-6;   // into the floor
+  p.position_m.col(1) << 0.00099, 0.0, 0.0005;      // 10 um into sphere 0
+  p.position_m.col(2) << 0.00099, 0.00099, 0.0005;  // and into sphere 1
   const double moved = separate_overlaps(p, cavity, 0.0);
   check_valid(p, cavity, 0.0);
   CHECK(moved > 4e-6);

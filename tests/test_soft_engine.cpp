@@ -1,13 +1,12 @@
 /// The soft-sphere engine against exact and independent results.
 #include <doctest/doctest.h>
-
 #include <omp.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <numbers>
+#include <sstream>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
@@ -186,7 +185,8 @@ TEST_CASE("momentum exchange with a free host: particles and host conserve verti
   auto momentum = [&] {
     const State st = engine.state();
     double z = 0.001 * st.observation.host.v_m_s;
-    for (Eigen::Index i = 0; i < st.particles.size(); ++i) z += st.particles.mass_kg[i] * st.particles.velocity_m_s(2, i);
+    for (Eigen::Index i = 0; i < st.particles.size(); ++i)
+      z += st.particles.mass_kg[i] * st.particles.velocity_m_s(2, i);
     return z;
   };
   const double before = momentum();
@@ -229,7 +229,8 @@ TEST_CASE("no contact is ever missed: the engine's contacts equal a brute-force 
 TEST_CASE("the time step resolves the Hertz contact and the tangential spring, and refuses what cannot") {
   const Scenario s = scenario_from("");
   // Table 1: fastest impact 2 x 1.755 m/s + sqrt(2 g H) = 3.88 m/s; t_c of a sphere pair ~ 71 us.
-  CHECK(max_impact_speed_m_s(s) == doctest::Approx(2 * 0.0157 * std::sqrt(470 / 0.0376) + std::sqrt(2 * 9.81 * 0.00704)).epsilon(1e-3));
+  CHECK(max_impact_speed_m_s(s) ==
+        doctest::Approx(2 * 0.0157 * std::sqrt(470 / 0.0376) + std::sqrt(2 * 9.81 * 0.00704)).epsilon(1e-3));
   const double tc = shortest_contact_time_s(s);
   CHECK(tc == doctest::Approx(7.1e-5).epsilon(0.03));
   // A sticking pair of 0.88 mm lead spheres: T_s = 2 pi sqrt(m / 7 k_s) = 7.4 us.
@@ -239,8 +240,8 @@ TEST_CASE("the time step resolves the Hertz contact and the tangential spring, a
   CHECK(choose_time_step_s(s) == doctest::Approx(std::min(tc / 50, ts / 8)));
   CHECK(shortest_tangential_period_s(scenario_from("[soft]\nks_N_m = 0\n")) == std::numeric_limits<double>::infinity());
   // The paper's 2.5 us is past the limit T_s/4; 1.5 us is not.
-  CHECK_THROWS_WITH_AS(choose_time_step_s(scenario_from("[run]\ndt_s = 2.5e-6\n")), doctest::Contains("run.dt_s = 2.5e-06"),
-                       InputError);
+  CHECK_THROWS_WITH_AS(choose_time_step_s(scenario_from("[run]\ndt_s = 2.5e-6\n")),
+                       doctest::Contains("run.dt_s = 2.5e-06"), InputError);
   CHECK_NOTHROW(choose_time_step_s(scenario_from("[run]\ndt_s = 1.5e-6\n")));
   CHECK_THROWS_WITH_AS(choose_time_step_s(scenario_from("[run]\ndt_s = 2e-5\n[soft]\nks_N_m = 0\n")),
                        doctest::Contains("t_c/10"), InputError);
@@ -271,7 +272,8 @@ Scenario with_time_step(const Scenario& s, double dt) {
 TEST_CASE("the energy balance error converges at second order in the time step") {
   // Two spinning spheres hit the floor of the free Table 1 host and each other, sliding
   // and sticking: every term of the books is exercised, and nothing is chaotic in 10 ms.
-  const Scenario s0 = scenario_from("[particles]\ncount = 2\ndiameter_m = 0.001\n[cavity]\ndiameter_m = 0.012\nheight_m = 0.01\n");
+  const Scenario s0 =
+      scenario_from("[particles]\ncount = 2\ndiameter_m = 0.001\n[cavity]\ndiameter_m = 0.012\nheight_m = 0.01\n");
   Particles p = spheres({{0.001, 0, 0.002 + s0.host.z0_m}, {0.003, 0.0005, 0.0045 + s0.host.z0_m}},
                         {{0.3, 0.1, -0.5}, {-0.2, 0, -1.0}});
   p.angular_velocity_rad_s.col(0) << 100, -300, 50;

@@ -2,8 +2,8 @@
 
 #include <fstream>
 
-#include "pdamp/errors.hpp"
 #include "../src/store/schema.hpp"
+#include "pdamp/errors.hpp"
 #include "pdamp/store/run_store.hpp"
 #include "test_support.hpp"
 
@@ -137,8 +137,9 @@ TEST_CASE("an older store is migrated forward and keeps its runs") {
     sqlite::Database v1(file);
     v1.exec(schema::migrations()[0]);
     v1.exec("PRAGMA user_version = 1");
-    v1.exec("INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, pdamp_version, "
-            "status, started_at) VALUES ('soft', 'old', '', 1, 0, 1.0, '0.0.1', 'completed', '2026-01-01T00:00:00Z')");
+    v1.exec(
+        "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, pdamp_version, "
+        "status, started_at) VALUES ('soft', 'old', '', 1, 0, 1.0, '0.0.1', 'completed', '2026-01-01T00:00:00Z')");
     id = v1.last_insert_rowid();
   }
   RunStore store(file);

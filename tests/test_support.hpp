@@ -1,6 +1,8 @@
 #pragma once
 /// Helpers shared by the tests.
 
+#include <unistd.h>
+
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
@@ -8,7 +10,6 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "pdamp/model/engine.hpp"
@@ -51,7 +52,7 @@ inline Particles spheres(const std::vector<Eigen::Vector3d>& positions, const st
 
 /// A single normal impact by the soft law, integrated far more finely than any engine step.
 struct ReferenceImpact {
-  double restitution;     ///< rebound speed over impact speed
+  double restitution;  ///< rebound speed over impact speed
   double contact_time_s;
 };
 

@@ -42,7 +42,8 @@ std::optional<CycleRecord> CycleAnalyzer::feed(const Observation& now) {
       const Observation& b = *before_previous_;
       auto kinetic = [&](const Observation& o) { return 0.5 * mass_kg_ * o.host.v_m_s * o.host.v_m_s; };
       if (kinetic(p) >= kinetic(b) && kinetic(p) >= kinetic_now) {
-        max_kinetic_J_ = std::max(max_kinetic_J_, parabola_vertex(b.t_s, kinetic(b), p.t_s, kinetic(p), now.t_s, kinetic_now));
+        max_kinetic_J_ =
+            std::max(max_kinetic_J_, parabola_vertex(b.t_s, kinetic(b), p.t_s, kinetic(p), now.t_s, kinetic_now));
       }
     }
     // Where the velocity changes sign, linear velocity gives the crossing time, and the

@@ -10,12 +10,12 @@
 #include <iostream>
 #include <sstream>
 
+#include "pdamp/compare/comparison.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/sim/stored_run.hpp"
-#include "pdamp/compare/comparison.hpp"
 #include "pdamp/soft/time_step.hpp"
 #include "pdamp/store/run_store.hpp"
 
@@ -58,8 +58,8 @@ void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
   if (!s) throw InputError("run " + std::to_string(run_id) + " is not in '" + store.database().file().string() + "'");
   out << "run " << s->run_id << ": " << s->model << " model, scenario '" << s->scenario_name << "', " << s->status;
   if (!s->message.empty()) out << " (" << s->message << ")";
-  out << "\n  particles               " << s->n_particles << "\n  simulated               " << s->sim_time_s
-      << " s of " << s->duration_s << " s\n  wall time               " << format_optional(s->wall_time_s) << " s"
+  out << "\n  particles               " << s->n_particles << "\n  simulated               " << s->sim_time_s << " s of "
+      << s->duration_s << " s\n  wall time               " << format_optional(s->wall_time_s) << " s"
       << "\n  energy balance error    " << format_optional(s->energy_balance_rel_err, 3) << " (max relative)"
       << "\n  dissipated impact       " << format_optional(s->dissipated_impact_J) << " J"
       << "\n  dissipated friction     " << format_optional(s->dissipated_friction_J) << " J"
@@ -93,8 +93,8 @@ InitialBed prepare_bed(const Scenario& scenario, RunStore& store, bool show_prog
   InitialBed bed = prepare_initial_bed(scenario, store, &stop_requested, progress);
   if (show_progress && !bed.reused && scenario.particles.count > 0) std::fputs("\n", stderr);
   if (bed.state_id) {
-    std::cerr << "pdamp: " << (bed.reused ? "starting from stored" : "settled and stored") << " bed "
-              << *bed.state_id << " (" << scenario.particles.count << " spheres at rest after " << bed.settle_time_s
+    std::cerr << "pdamp: " << (bed.reused ? "starting from stored" : "settled and stored") << " bed " << *bed.state_id
+              << " (" << scenario.particles.count << " spheres at rest after " << bed.settle_time_s
               << " s of settling)\n";
   }
   return bed;
@@ -114,9 +114,12 @@ RunControl run_control(const Scenario& scenario, bool show_progress) {
 
 int exit_code(const StoredRun& run) {
   switch (run.outcome.status) {
-    case RunStatus::completed: return 0;
-    case RunStatus::interrupted: return 128 + stop_signal.load();
-    default: break;
+    case RunStatus::completed:
+      return 0;
+    case RunStatus::interrupted:
+      return 128 + stop_signal.load();
+    default:
+      break;
   }
   std::cerr << "pdamp: run " << run.run_id << " failed: " << run.outcome.message << "\n";
   return 1;
@@ -134,8 +137,9 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
   RunStore store(db);
   install_stop_handlers();
   const InitialBed bed = prepare_bed(scenario, store, show_progress);
-  const StoredRun run = run_and_store(store, model, scenario, bed, run_control(scenario, show_progress),
-                                      [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; });
+  const StoredRun run =
+      run_and_store(store, model, scenario, bed, run_control(scenario, show_progress),
+                    [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; });
   if (show_progress) std::fputs("\n", stderr);
   print_summary(store, run.run_id, std::cout);
   return exit_code(run);
@@ -149,10 +153,12 @@ void print_comparison(RunStore& store, std::int64_t id, const ComparisonRecord& 
   auto psi_peak = [&](std::int64_t run) {
     sqlite::Statement q(store.database(), "SELECT psi, gamma FROM cycles WHERE run_id = ? ORDER BY psi DESC LIMIT 1");
     q.bind(1, run);
-    return q.step() ? format_optional(q.column_double(0), 3) + " (Gamma " + format_optional(q.column_optional_double(1), 3) + ")"
+    return q.step() ? format_optional(q.column_double(0), 3) + " (Gamma " +
+                          format_optional(q.column_optional_double(1), 3) + ")"
                     : std::string("-");
   };
-  auto row = [&](const std::string& name, const std::string& soft, const std::string& hard, const std::string& note = "") {
+  auto row = [&](const std::string& name, const std::string& soft, const std::string& hard,
+                 const std::string& note = "") {
     out << "  " << std::left << std::setw(32) << name << std::setw(20) << soft << std::setw(20) << hard << note << "\n";
   };
   const auto energy_end = c.energy.end() - 2;  // the last time: soft then hard
@@ -165,13 +171,14 @@ void print_comparison(RunStore& store, std::int64_t id, const ComparisonRecord& 
   row("  impact", cell(energy_end->impact_J), cell((energy_end + 1)->impact_J));
   row("  friction", cell(energy_end->friction_J), cell((energy_end + 1)->friction_J));
   row("  viscous", cell(energy_end->viscous_J), cell((energy_end + 1)->viscous_J));
-  row("  total", cell(c.dissipated_soft_J), cell(c.dissipated_hard_J), "hard vs soft " + cell(c.dissipated_rel_diff, 3));
+  row("  total", cell(c.dissipated_soft_J), cell(c.dissipated_hard_J),
+      "hard vs soft " + cell(c.dissipated_rel_diff, 3));
   row("psi peak (at Gamma)", psi_peak(c.soft_run_id), psi_peak(c.hard_run_id));
   row("frequency once Gamma < 1 (Hz)", cell(c.small_amplitude_freq_soft_hz), cell(c.small_amplitude_freq_hard_hz));
   row("Gamma < 1 from (s)", cell(c.gamma_below_1_soft_s), cell(c.gamma_below_1_hard_s));
   out << "  envelope difference (of the first amplitude): max " << cell(c.envelope_max_rel_diff, 3) << ", rms "
-      << cell(c.envelope_rms_rel_diff, 3) << "\n  psi(Gamma) mean |difference| over Gamma bins: "
-      << cell(c.psi_mean_abs_diff, 3) << "\n";
+      << cell(c.envelope_rms_rel_diff, 3)
+      << "\n  psi(Gamma) mean |difference| over Gamma bins: " << cell(c.psi_mean_abs_diff, 3) << "\n";
 }
 
 }  // namespace
@@ -211,8 +218,8 @@ int stop_signal_received() { return stop_signal.load(); }
 void set_thread_count(const std::string& text) {
   int threads = 0;
   const char* end = text.data() + text.size();
-  if (auto [ptr, ec] = std::from_chars(text.data(), end, threads); ec != std::errc() || ptr != end || threads < 1 ||
-                                                                    threads > 1024) {
+  if (auto [ptr, ec] = std::from_chars(text.data(), end, threads);
+      ec != std::errc() || ptr != end || threads < 1 || threads > 1024) {
     throw InputError("--threads '" + text + "': must be a whole number from 1 to 1024");
   }
   omp_set_num_threads(threads);
@@ -223,7 +230,8 @@ int list_runs_command(const std::filesystem::path& db) {
   RunStore store(db);
   std::cout << std::left << std::setw(7) << "run_id" << std::setw(6) << "model" << std::setw(24) << "scenario"
             << std::setw(12) << "status" << std::right << std::setw(10) << "particles" << std::setw(11) << "sim_s"
-            << std::setw(11) << "wall_s" << std::setw(11) << "balance" << std::setw(8) << "cycles" << "\n";
+            << std::setw(11) << "wall_s" << std::setw(11) << "balance" << std::setw(8) << "cycles"
+            << "\n";
   for (const auto& s : store.list_runs()) {
     std::cout << std::left << std::setw(7) << s.run_id << std::setw(6) << s.model << std::setw(24) << s.scenario_name
               << std::setw(12) << s.status << std::right << std::setw(10) << s.n_particles << std::setw(11)
@@ -236,7 +244,8 @@ int list_runs_command(const std::filesystem::path& db) {
 int show_run_command(const std::string& run_id_text, const std::filesystem::path& db) {
   std::int64_t run_id = 0;
   const char* end = run_id_text.data() + run_id_text.size();
-  if (auto [ptr, ec] = std::from_chars(run_id_text.data(), end, run_id); ec != std::errc() || ptr != end || run_id < 1) {
+  if (auto [ptr, ec] = std::from_chars(run_id_text.data(), end, run_id);
+      ec != std::errc() || ptr != end || run_id < 1) {
     throw InputError("RUN_ID '" + run_id_text + "' must be a positive whole number (see 'pdamp runs')");
   }
   require_existing(db);
@@ -252,9 +261,9 @@ int check_command(const ScenarioRequest& request) {
   if (scenario.particles.count > 0) {
     const double dt = soft::choose_time_step_s(scenario);
     std::cout << "# soft engine time step: " << dt << " s (" << (scenario.run.dt_s ? "given" : "automatic")
-              << "); shortest Hertz contact " << soft::shortest_contact_time_s(scenario)
-              << " s at the fastest impact, " << soft::max_impact_speed_m_s(scenario)
-              << " m/s; tangential spring period " << soft::shortest_tangential_period_s(scenario) << " s\n";
+              << "); shortest Hertz contact " << soft::shortest_contact_time_s(scenario) << " s at the fastest impact, "
+              << soft::max_impact_speed_m_s(scenario) << " m/s; tangential spring period "
+              << soft::shortest_tangential_period_s(scenario) << " s\n";
   }
   return 0;
 }

@@ -100,7 +100,8 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     ScenarioRequest request = scenario_request(vm, command);
     if (vm.count("duration")) request.overrides.push_back("run.duration_s=" + vm["duration"].as<std::string>());
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
-    if (vm.count("simd")) soft::set_default_simd_path(soft::parse_simd_path(vm["simd"].as<std::string>(), "--simd"), "--simd");
+    if (vm.count("simd"))
+      soft::set_default_simd_path(soft::parse_simd_path(vm["simd"].as<std::string>(), "--simd"), "--simd");
     return run_command(request, required(vm, "model", command), vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0);
   }
   if (command == "compare") {

@@ -42,8 +42,8 @@ Dissipation dissipation_at(RunStore& store, std::int64_t run_id, double t_s) {
                       "FROM samples WHERE run_id = ? AND t_s <= ? ORDER BY t_s DESC LIMIT 1");
   q.bind(1, run_id).bind(2, t_s * (1.0 + 1e-12));
   if (!q.step()) throw InputError("run " + std::to_string(run_id) + " has no samples to compare");
-  return {q.column_double(0), q.column_double(1), q.column_double(2), q.column_double(3), q.column_int(4),
-          q.column_int(5)};
+  return {q.column_double(0), q.column_double(1), q.column_double(2),
+          q.column_double(3), q.column_int(4),    q.column_int(5)};
 }
 
 double wall_time(RunStore& store, std::int64_t run_id) {
@@ -55,8 +55,8 @@ double wall_time(RunStore& store, std::int64_t run_id) {
 /// Amplitude of a run's cycles at time t, interpolated between cycle mid-times.
 std::optional<double> amplitude_at(const std::vector<Cycle>& cycles, double t_s) {
   if (cycles.empty() || t_s < cycles.front().t_mid_s || t_s > cycles.back().t_mid_s) return std::nullopt;
-  const auto after = std::lower_bound(cycles.begin(), cycles.end(), t_s,
-                                      [](const Cycle& c, double t) { return c.t_mid_s < t; });
+  const auto after =
+      std::lower_bound(cycles.begin(), cycles.end(), t_s, [](const Cycle& c, double t) { return c.t_mid_s < t; });
   if (after == cycles.begin()) return after->amplitude_m;
   const auto before = after - 1;
   const double f = (t_s - before->t_mid_s) / (after->t_mid_s - before->t_mid_s);
@@ -148,10 +148,12 @@ ComparisonRecord compare_stored_runs(RunStore& store, std::int64_t soft_run_id, 
   }
   if (shared > 0) r.psi_mean_abs_diff = differences / shared;
 
-  const Dissipation soft_end = dissipation_at(store, soft_run_id, 1e300), hard_end = dissipation_at(store, hard_run_id, 1e300);
+  const Dissipation soft_end = dissipation_at(store, soft_run_id, 1e300),
+                    hard_end = dissipation_at(store, hard_run_id, 1e300);
   r.dissipated_soft_J = soft_end.total_J();
   r.dissipated_hard_J = hard_end.total_J();
-  if (r.dissipated_soft_J > 0.0) r.dissipated_rel_diff = (r.dissipated_hard_J - r.dissipated_soft_J) / r.dissipated_soft_J;
+  if (r.dissipated_soft_J > 0.0)
+    r.dissipated_rel_diff = (r.dissipated_hard_J - r.dissipated_soft_J) / r.dissipated_soft_J;
   std::vector<double> times;
   for (const double t : comparison_times_s) {
     if (t <= std::min(soft_end.t_s, hard_end.t_s)) times.push_back(t);

@@ -1,13 +1,14 @@
 #include "pdamp/hard/hard_engine.hpp"
 
+#include <unistd.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <Eigen/Cholesky>
-#include <Eigen/Geometry>
 #include <sstream>
 #include <tuple>
-#include <unistd.h>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
@@ -59,8 +60,12 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       particles_(initial),
       sphere_(initial.size()),
       trajectory_counter_(initial.size(), 0),
-      jam_{-1.0, std::vector<int>(initial.size(), 0), std::vector<std::vector<int>>(initial.size()),
-           std::vector<std::uint8_t>(initial.size(), 0), {}, {}},
+      jam_{-1.0,
+           std::vector<int>(initial.size(), 0),
+           std::vector<std::vector<int>>(initial.size()),
+           std::vector<std::uint8_t>(initial.size(), 0),
+           {},
+           {}},
       in_jam_(initial.size(), 0),
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
@@ -92,8 +97,8 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
   }
   if (const double overlap = max_overlap_m(); overlap > 0.0) {
     std::ostringstream why;
-    why << "the hard engine needs non-overlapping initial spheres inside the cavity; the deepest overlap is "
-        << overlap << " m";
+    why << "the hard engine needs non-overlapping initial spheres inside the cavity; the deepest overlap is " << overlap
+        << " m";
     throw InputError(why.str());
   }
   rebuild_predictions();
@@ -520,9 +525,9 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
     if (stays_apart(gap, rate, std::abs(gravity_m_s2_.z()) + acceleration_bound, end_s - t, contact_tolerance_m_)) {
       continue;
     }
-    consider(cap_contact(f, r + margin_m, top, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_,
-                         closing),
-             top ? EventKind::top_cap : EventKind::bottom_cap, 0);
+    consider(
+        cap_contact(f, r + margin_m, top, height, host_, host, gravity_m_s2_, t, end_s, contact_tolerance_m_, closing),
+        top ? EventKind::top_cap : EventKind::bottom_cap, 0);
   }
   if (riding_count_ == 0) return best;
   // Riders within reach of the sphere's host-frame path until the host has moved at most
@@ -533,7 +538,8 @@ HardEngine::HostContact HardEngine::host_contact(int i, double end_s, double mar
   const double span = window_end - t;
   Eigen::Vector3d centre = f.position_at(t, gravity_m_s2_);
   centre.z() -= host.z_m;
-  Eigen::Vector3d half = f.velocity_at(t, gravity_m_s2_).cwiseAbs() * span + 0.5 * gravity_m_s2_.cwiseAbs() * span * span;
+  Eigen::Vector3d half =
+      f.velocity_at(t, gravity_m_s2_).cwiseAbs() * span + 0.5 * gravity_m_s2_.cwiseAbs() * span * span;
   half.array() += r + max_radius_m_ + margin_m;
   half.z() += host_speed * span + (margin_m > 0.0 ? 0.0 : touching_slack_m_);
   // The distance to a rider closes at most at the relative speed, which grows at most by
@@ -703,8 +709,7 @@ void HardEngine::collide_spheres(int i, int j) {
   const double mi = particles_.mass_kg[i], mj = particles_.mass_kg[j];
   const double approach = dv.dot(n);
   const HardContactLaw law = law_for(approach, false, i, j);
-  const CollisionOutcome out =
-      walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj), law);
+  const CollisionOutcome out = walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj), law);
   const Eigen::Vector3d& p = out.impulse_N_s;
   const Eigen::Vector3d torque_arm = n.cross(p);
   particles_.velocity_m_s.col(i) += p / mi;
@@ -817,7 +822,8 @@ void HardEngine::merge_rigidly(const std::vector<int>& members) {
   for (const int k : members) {
     const double m = particles_.mass_kg[k], moment = particles_.moment_of_inertia(k);
     const Eigen::Vector3d r = particles_.position_m.col(k) - centre;
-    angular_momentum += m * r.cross(particles_.velocity_m_s.col(k) - velocity) + moment * particles_.angular_velocity_rad_s.col(k);
+    angular_momentum +=
+        m * r.cross(particles_.velocity_m_s.col(k) - velocity) + moment * particles_.angular_velocity_rad_s.col(k);
     inertia += (moment + m * r.squaredNorm()) * Eigen::Matrix3d::Identity() - m * r * r.transpose();
   }
   const Eigen::Vector3d spin = inertia.llt().solve(angular_momentum);
@@ -830,8 +836,10 @@ void HardEngine::merge_rigidly(const std::vector<int>& members) {
       const Eigen::Vector3d n = (particles_.position_m.col(j) - particles_.position_m.col(k)).normalized();
       const Eigen::Vector3d u = particles_.velocity_m_s.col(k) - particles_.velocity_m_s.col(j) +
                                 (particles_.radius_m[k] * particles_.angular_velocity_rad_s.col(k) +
-                                 particles_.radius_m[j] * particles_.angular_velocity_rad_s.col(j)).cross(n);
-      const double reduced = particles_.mass_kg[k] * particles_.mass_kg[j] / (particles_.mass_kg[k] + particles_.mass_kg[j]);
+                                 particles_.radius_m[j] * particles_.angular_velocity_rad_s.col(j))
+                                    .cross(n);
+      const double reduced =
+          particles_.mass_kg[k] * particles_.mass_kg[j] / (particles_.mass_kg[k] + particles_.mass_kg[j]);
       normal += reduced * u.dot(n) * u.dot(n);
       total += reduced * u.squaredNorm();
     }
@@ -894,11 +902,13 @@ double HardEngine::host_inverse_mass_1_kg() const {
   return host_model_.has_infinite_mass() ? 0.0 : 1.0 / (host_model_.mass_kg() + riding_mass_kg_);
 }
 
-void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out, const HostState& host) {
+void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out,
+                                    const HostState& host) {
   const Eigen::Vector3d& p = out.impulse_N_s;
   const double r = particles_.radius_m[i];
   particles_.velocity_m_s.col(i) += p / particles_.mass_kg[i];
-  particles_.angular_velocity_rad_s.col(i) += r * n.cross(p) / particles_.moment_of_inertia(static_cast<Eigen::Index>(i));
+  particles_.angular_velocity_rad_s.col(i) +=
+      r * n.cross(p) / particles_.moment_of_inertia(static_cast<Eigen::Index>(i));
   impact_J_ += out.impact_J;
   friction_J_ += out.friction_J;
   new_trajectory(i);
@@ -929,9 +939,8 @@ void HardEngine::collide_wall(int i, EventKind wall) {
   const Eigen::Vector3d u = dv + (r * particles_.angular_velocity_rad_s.col(i)).cross(n);
   const Mobility mobility = sphere_mobility(particles_.mass_kg[i]) + Mobility{0, 0, host_inverse_mass_1_kg()};
   // As predicted: the cap's gap rate ∓(v_z − v_h), the side wall's x·v in the plane.
-  const double approach = wall == EventKind::side_wall
-                              ? x.head<2>().dot(dv.head<2>()) / x.head<2>().norm()
-                              : n.z() * (particles_.velocity_m_s(2, i) - host.v_m_s);
+  const double approach = wall == EventKind::side_wall ? x.head<2>().dot(dv.head<2>()) / x.head<2>().norm()
+                                                       : n.z() * (particles_.velocity_m_s(2, i) - host.v_m_s);
   const HardContactLaw law = law_for(approach, true, i, -1);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
   apply_host_impulse(i, n, out, host);
@@ -1000,16 +1009,22 @@ void HardEngine::cross_face(int i, Face face) {
   CellCoord c = sphere_[i].cell;
   const int step = face % 2 == 1 ? 1 : -1;
   switch (face / 2) {
-    case 0: c.ix += step; break;
-    case 1: c.iy += step; break;
-    default: c.iz += step; break;
+    case 0:
+      c.ix += step;
+      break;
+    case 1:
+      c.iy += step;
+      break;
+    default:
+      c.iz += step;
+      break;
   }
   free_cells_.remove(i);
   enter_cell(i, c);
   // Only the layer of cells beyond the face is new around i: its contacts with the
   // spheres in the others were predicted with the same trajectory.
   Around around;
-  grid_.block(c, grid_.cell_count(), around);  // the empty stand-in beyond the sides
+  grid_.block(c, grid_.cell_count(), around);    // the empty stand-in beyond the sides
   constexpr std::array<int, 3> stride{1, 3, 9};  // in Around, of x, y and z
   const int axis = face / 2, beyond = (face % 2 == 1 ? 2 : 0) * stride[axis];
   const int u_stride = stride[(axis + 1) % 3], w_stride = stride[(axis + 2) % 3];
@@ -1071,7 +1086,8 @@ void HardEngine::restart_host(HostState start) {
   }
   // The outermost tier whose budget is spent is swept (with every tier inside it);
   // otherwise only the touching spheres need new predictions.
-  const auto spent = std::find_if(tiers_.begin(), tiers_.end(), [](const MarginTier& t) { return t.budget_m >= t.margin_m; });
+  const auto spent =
+      std::find_if(tiers_.begin(), tiers_.end(), [](const MarginTier& t) { return t.budget_m >= t.margin_m; });
   if (spent != tiers_.end()) {
     sweep_tier(static_cast<std::size_t>(spent - tiers_.begin()));
   } else {

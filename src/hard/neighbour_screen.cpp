@@ -55,9 +55,7 @@ using Mask = decltype(Lanes{} < Lanes{});
 /// below (`flatten` may not, unoptimised), and a vector passed in registers between
 /// code compiled for different instruction sets would arrive garbled.
 struct BitsSse2 {
-  static unsigned of(const Mask& m) {
-    return static_cast<unsigned>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8));
-  }
+  static unsigned of(const Mask& m) { return static_cast<unsigned>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8)); }
 };
 struct BitsAvx2 {
   [[gnu::target("avx2")]] static unsigned of(const Mask& m) {

@@ -1,7 +1,7 @@
 #include "pdamp/scenario/scenario_loader.hpp"
 
-#include <boost/program_options.hpp>
 #include <algorithm>
+#include <boost/program_options.hpp>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -19,9 +19,7 @@ namespace po = boost::program_options;
 
 namespace pdamp {
 
-double ExcitationSettings::angular_frequency_rad_s() const {
-  return 2.0 * std::numbers::pi * frequency_hz;
-}
+double ExcitationSettings::angular_frequency_rad_s() const { return 2.0 * std::numbers::pi * frequency_hz; }
 
 namespace {
 
@@ -96,11 +94,10 @@ Apply number(double& (*field)(Scenario&), Range range) {
 #define PDAMP_FIELD(expr) [](Scenario& s) -> double& { return s.expr; }
 
 ExcitationMode parse_mode(const Value& v) {
-  static const std::map<std::string, ExcitationMode> modes{
-      {"free", ExcitationMode::free_decay},
-      {"base", ExcitationMode::base_motion},
-      {"force", ExcitationMode::force},
-      {"prescribed", ExcitationMode::prescribed_motion}};
+  static const std::map<std::string, ExcitationMode> modes{{"free", ExcitationMode::free_decay},
+                                                           {"base", ExcitationMode::base_motion},
+                                                           {"force", ExcitationMode::force},
+                                                           {"prescribed", ExcitationMode::prescribed_motion}};
   const auto it = modes.find(v.text);
   if (it == modes.end()) reject(v, "must be one of free, base, force, prescribed");
   return it->second;
@@ -113,7 +110,11 @@ std::vector<KeySpec> soft_law_keys(const std::string& section, SoftContactLaw Sc
   };
   auto inherit = [&](const std::string& key) { return inherit_section.empty() ? "" : inherit_section + "." + key; };
   const SoftContactLaw d;
-  auto text = [](double x) { std::ostringstream o; o << x; return o.str(); };
+  auto text = [](double x) {
+    std::ostringstream o;
+    o << x;
+    return o.str();
+  };
   const std::string who = inherit_section.empty() ? "sphere-sphere" : "sphere-wall";
   return {
       {section + ".kn_N_m1_5", text(d.kn_N_m1_5), "N/m^1.5", "Hertz normal stiffness k_n (" + who + ")",
@@ -150,7 +151,10 @@ const std::vector<KeySpec>& key_specs() {
   static const std::vector<KeySpec> specs = [] {
     std::vector<KeySpec> k{
         {"scenario.name", "", "", "name stored with each run (default: the file name without extension)",
-         [](Scenario& s, const Value& v) { if (!v.text.empty()) s.name = v.text; }, ""},
+         [](Scenario& s, const Value& v) {
+           if (!v.text.empty()) s.name = v.text;
+         },
+         ""},
         {"host.mass_kg", "0.0376", "kg", "host mass M (for prescribed motion: the nominal mass used in psi)",
          number(PDAMP_FIELD(host.mass_kg), positive), ""},
         {"host.stiffness_N_m", "470", "N/m", "host spring K", number(PDAMP_FIELD(host.stiffness_N_m), positive), ""},
@@ -171,7 +175,8 @@ const std::vector<KeySpec>& key_specs() {
          number(PDAMP_FIELD(excitation.frequency_hz), non_negative), ""},
         {"excitation.phase_rad", "0", "rad", "excitation phase phi",
          number(PDAMP_FIELD(excitation.phase_rad), any_number), ""},
-        {"cavity.diameter_m", "0.0254", "m", "cylinder diameter D", number(PDAMP_FIELD(cavity.diameter_m), positive), ""},
+        {"cavity.diameter_m", "0.0254", "m", "cylinder diameter D", number(PDAMP_FIELD(cavity.diameter_m), positive),
+         ""},
         {"cavity.height_m", "0.00704", "m", "cylinder height H", number(PDAMP_FIELD(cavity.height_m), positive), ""},
         {"gravity.g_m_s2", "9.81", "m/s^2",
          "one number: magnitude of gravity pointing down (-z), 0 for microgravity; three numbers: the vector",
@@ -179,20 +184,25 @@ const std::vector<KeySpec>& key_specs() {
            const auto words = split_words(v.text);
            if (words.size() == 1) {
              const double g = parse_number(v, words[0]);
-             if (g < 0) reject(v, "a single number is the downward magnitude and must be >= 0; give 'gx gy gz' for another direction");
+             if (g < 0)
+               reject(
+                   v,
+                   "a single number is the downward magnitude and must be >= 0; give 'gx gy gz' for another direction");
              s.gravity_m_s2 = {0.0, 0.0, -g};
            } else if (words.size() == 3) {
              s.gravity_m_s2 = {parse_number(v, words[0]), parse_number(v, words[1]), parse_number(v, words[2])};
            } else {
              reject(v, "expected one number (downward magnitude) or three (gx gy gz)");
            }
-         }, ""},
+         },
+         ""},
         {"particles.count", "1246", "", "number of spheres n (0 runs the host alone)",
          [](Scenario& s, const Value& v) {
            const double n = parse_in_range(v, non_negative);
            if (n != std::floor(n) || n > 10'000'000) reject(v, "must be a whole number from 0 to 10000000");
            s.particles.count = static_cast<int>(n);
-         }, ""},
+         },
+         ""},
         {"particles.diameter_m", "0.00088", "m", "sphere diameter d, or 'dmin dmax' for diameters uniform in a range",
          [](Scenario& s, const Value& v) {
            const auto words = split_words(v.text);
@@ -202,7 +212,8 @@ const std::vector<KeySpec>& key_specs() {
            if (!(lo > 0) || hi < lo) reject(v, "diameters must be > 0, and dmin <= dmax");
            s.particles.diameter_min_m = lo;
            s.particles.diameter_max_m = hi;
-         }, ""},
+         },
+         ""},
         {"particles.density_kg_m3", "9000", "kg/m^3", "sphere material density",
          number(PDAMP_FIELD(particles.density_kg_m3), positive), ""},
         {"particles.seed", "1", "", "random seed of the initial placement (unsigned 64-bit)",
@@ -212,7 +223,8 @@ const std::vector<KeySpec>& key_specs() {
            auto [ptr, ec] = std::from_chars(v.text.data(), end, seed);
            if (ec != std::errc() || ptr != end) reject(v, "must be a whole number from 0 to 18446744073709551615");
            s.particles.seed = seed;
-         }, ""},
+         },
+         ""},
         {"run.duration_s", "1.5", "s", "simulated time", number(PDAMP_FIELD(run.duration_s), positive), ""},
         {"run.sample_interval_s", "0.001", "s", "interval between stored samples",
          number(PDAMP_FIELD(run.sample_interval_s), positive), ""},
@@ -230,7 +242,8 @@ const std::vector<KeySpec>& key_specs() {
              reject(v, time_step.text);
            }
            s.run.dt_s = parse_in_range(v, time_step);
-         }, ""},
+         },
+         ""},
     };
     for (auto& spec : soft_law_keys("soft", &Scenario::soft_particle, "")) k.push_back(spec);
     for (auto& spec : soft_law_keys("soft_wall", &Scenario::soft_wall, "soft")) k.push_back(spec);
@@ -239,10 +252,14 @@ const std::vector<KeySpec>& key_specs() {
                  "constant (en and beta0 as given) | calibrated (e_n(v) and beta0(v) of the soft law, from "
                  "isolated soft collisions at the impact speed)",
                  [](Scenario& s, const Value& v) {
-                   if (v.text == "constant") s.hard_restitution = HardRestitution::constant;
-                   else if (v.text == "calibrated") s.hard_restitution = HardRestitution::calibrated;
-                   else reject(v, "must be constant or calibrated");
-                 }, ""});
+                   if (v.text == "constant")
+                     s.hard_restitution = HardRestitution::constant;
+                   else if (v.text == "calibrated")
+                     s.hard_restitution = HardRestitution::calibrated;
+                   else
+                     reject(v, "must be constant or calibrated");
+                 },
+                 ""});
     // The hard engine's resting-bed parameters (README, "Resting beds and inelastic collapse").
     k.push_back({"hard.rest_speed_m_s", "0.005", "m/s",
                  "a sphere leaving the floor, top cap or a resting sphere slower than this (relative to the host) "
@@ -304,7 +321,8 @@ void parse_overrides(RawScenario& raw, const ScenarioOverrides& overrides) {
 bool differs_from_default(const RawScenario& raw, const std::string& key) {
   const auto it = raw.given.find(key);
   if (it == raw.given.end()) return false;
-  const auto spec = std::find_if(key_specs().begin(), key_specs().end(), [&](const KeySpec& k) { return k.key == key; });
+  const auto spec =
+      std::find_if(key_specs().begin(), key_specs().end(), [&](const KeySpec& k) { return k.key == key; });
   return parse_number(it->second, it->second.text) != parse_number(it->second, spec->default_text);
 }
 
@@ -324,8 +342,8 @@ void check_excitation(const Scenario& s, const RawScenario& raw) {
   const std::string in_mode = " is not used by excitation.mode = " + mode;
   switch (e.mode) {
     case ExcitationMode::free_decay:
-      for (const char* key : {"excitation.amplitude_m", "excitation.force_N", "excitation.frequency_hz",
-                              "excitation.phase_rad"}) {
+      for (const char* key :
+           {"excitation.amplitude_m", "excitation.force_N", "excitation.frequency_hz", "excitation.phase_rad"}) {
         forbid(key, std::string(key) + in_mode + "; set excitation.mode to base, force or prescribed");
       }
       break;
@@ -372,8 +390,8 @@ void check_particles(const Scenario& s, const RawScenario& raw) {
   const int capacity = max_particles_that_fit(s.cavity, d);
   if (s.particles.count > capacity) {
     std::ostringstream why;
-    why << "at most " << capacity << " spheres of diameter " << d << " m can be placed in this cavity (D = "
-        << s.cavity.diameter_m << " m, H = " << s.cavity.height_m << " m)";
+    why << "at most " << capacity << " spheres of diameter " << d
+        << " m can be placed in this cavity (D = " << s.cavity.diameter_m << " m, H = " << s.cavity.height_m << " m)";
     reject(value_of("particles.count", "1246"), why.str());
   }
 }

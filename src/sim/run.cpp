@@ -25,8 +25,7 @@ CycleAnalyzer make_cycle_analyzer(const Scenario& scenario, const Particles& bed
   return CycleAnalyzer(scenario.host.mass_kg, equilibrium_z, std::abs(g_z));
 }
 
-RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
-                          const RunControl& control) {
+RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder, const RunControl& control) {
   using clock = std::chrono::steady_clock;
   const auto wall_start = clock::now();
   auto next_progress = wall_start;
@@ -59,8 +58,9 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
     record(true);
     for (long k = 0; now.t_s < duration; ++k) {
       for (long j = 1; j <= observations_per_sample && now.t_s < duration; ++j) {
-        const double t = j == observations_per_sample ? static_cast<double>(k + 1) * sample_interval
-                                                      : static_cast<double>(k) * sample_interval + static_cast<double>(j) * h;
+        const double t = j == observations_per_sample
+                             ? static_cast<double>(k + 1) * sample_interval
+                             : static_cast<double>(k) * sample_interval + static_cast<double>(j) * h;
         const double target = std::min(t, duration);
         engine.advance_to(target);
         now = engine.observe();

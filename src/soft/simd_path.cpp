@@ -25,9 +25,12 @@ constexpr bool wide_kernels_built = false;
 
 std::string_view to_string(SimdPath path) {
   switch (path) {
-    case SimdPath::sse2: return "sse2";
-    case SimdPath::avx2: return "avx2";
-    case SimdPath::avx512: break;
+    case SimdPath::sse2:
+      return "sse2";
+    case SimdPath::avx2:
+      return "avx2";
+    case SimdPath::avx512:
+      break;
   }
   return "avx512";
 }
@@ -43,9 +46,12 @@ bool is_available(SimdPath path) {
   if (path != SimdPath::sse2 && !wide_kernels_built) return false;
   // __builtin_cpu_supports also checks that the operating system saves the wide registers.
   switch (path) {
-    case SimdPath::sse2: return true;
-    case SimdPath::avx2: return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
-    case SimdPath::avx512: break;
+    case SimdPath::sse2:
+      return true;
+    case SimdPath::avx2:
+      return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("popcnt");
+    case SimdPath::avx512:
+      break;
   }
   return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("popcnt");
 }

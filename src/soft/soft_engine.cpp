@@ -57,7 +57,8 @@ template <class Real>
   using Ints = IntLanes<Real>;
   Ints packed;
   std::memcpy(&packed, pairs, sizeof packed);
-  const Ints owner = group_first + (packed & (NeighbourList::group_size - 1)), partner = packed >> NeighbourList::group_bits;
+  const Ints owner = group_first + (packed & (NeighbourList::group_size - 1)),
+             partner = packed >> NeighbourList::group_bits;
   std::memcpy(owners, &owner, sizeof owner);
   std::memcpy(partners, &partner, sizeof partner);
 }
@@ -109,9 +110,12 @@ bool SoftEngine::runs_in_parallel() const {
 template <class Pass>
 auto SoftEngine::kernel() const -> void (*)(Pass&, int) {
   switch (simd_path_) {
-    case SimdPath::sse2: return &run_sse2<Pass>;
-    case SimdPath::avx2: return &run_avx2<Pass>;
-    case SimdPath::avx512: break;
+    case SimdPath::sse2:
+      return &run_sse2<Pass>;
+    case SimdPath::avx2:
+      return &run_avx2<Pass>;
+    case SimdPath::avx512:
+      break;
   }
   return &run_avx512<Pass>;
 }
@@ -202,9 +206,9 @@ void SoftEngine::check_particles_inside() const {
     const Eigen::Vector3d x = balls_.vector(i);
     if (!x.allFinite() || cavity_.clearance_m(x, balls_[i].radius, host_.z_m) < -balls_[i].radius) {
       std::ostringstream msg;
-      msg << "particle " << original_index_[i] << " left the cavity at t = " << t_s_ << " s (position "
-          << x.transpose() << " m): a contact let it through. Contacts overlapped up to "
-          << 100.0 * max_overlap_ratio_ << " % of a radius: ";
+      msg << "particle " << original_index_[i] << " left the cavity at t = " << t_s_ << " s (position " << x.transpose()
+          << " m): a contact let it through. Contacts overlapped up to " << 100.0 * max_overlap_ratio_
+          << " % of a radius: ";
       if (max_overlap_ratio_ > 0.5) {
         msg << "the contact law is too soft to stop impacts this fast (a stiffer k_n or a gentler excitation would)";
       } else {
@@ -271,9 +275,9 @@ bool SoftEngine::drift_chunk(int c, double kick_s, double dt_s) {
     const R new_vx = v.a + load<R>(fx + s) * linear, new_vy = v.b + load<R>(fy + s) * linear,
             new_vz = v.c + load<R>(fz + s) * linear;
     store_records<R>({new_vx, new_vy, new_vz, v.d}, record(velocities));
-    store_records<R>({w.a + load<R>(tx + s) * angular, w.b + load<R>(ty + s) * angular, w.c + load<R>(tz + s) * angular,
-                      w.d},
-                     record(spins));
+    store_records<R>(
+        {w.a + load<R>(tx + s) * angular, w.b + load<R>(ty + s) * angular, w.c + load<R>(tz + s) * angular, w.d},
+        record(spins));
     const Fields4<R> ball = load_records<R>(record(balls));  // x, y, z, radius
     const R new_x = ball.a + new_vx * dt_s, new_y = ball.b + new_vy * dt_s, new_z = ball.c + new_vz * dt_s;
     store_records<R>({new_x, new_y, new_z, ball.d}, record(balls));
@@ -344,7 +348,8 @@ void SoftEngine::reorder_spheres(const std::vector<int>& order) {
   permute(v_, order, visited_);
   permute(w_, order, visited_);
   permute(mass_, order, visited_);
-  for (std::vector<int>* indices : {&original_index_, &wall_contacts_[side], &wall_contacts_[bottom], &wall_contacts_[top]}) {
+  for (std::vector<int>* indices :
+       {&original_index_, &wall_contacts_[side], &wall_contacts_[bottom], &wall_contacts_[top]}) {
     permute(*indices, order, visited_);
   }
 }
@@ -363,7 +368,8 @@ void SoftEngine::hand_over_contacts(const std::vector<int>& order) {
   last_reader_.assign(chunks, -1);
   for (int i = 0; i < n; ++i) {
     for (int s = kept_first_[i]; s < kept_first_[i + 1]; ++s) last_reader_[kept_[s].table] = i / chunk_size;
-    if (wall_contact_count(i) > 0) last_reader_[order[i] / chunk_size] = std::max(last_reader_[order[i] / chunk_size], i / chunk_size);
+    if (wall_contact_count(i) > 0)
+      last_reader_[order[i] / chunk_size] = std::max(last_reader_[order[i] / chunk_size], i / chunk_size);
   }
   release_order_.resize(chunks);
   std::iota(release_order_.begin(), release_order_.end(), 0);
@@ -371,7 +377,8 @@ void SoftEngine::hand_over_contacts(const std::vector<int>& order) {
                    [&](int a, int b) { return last_reader_[a] < last_reader_[b]; });
   auto released = release_order_.begin();
   auto release_tables_read_last_by = [&](int c) {
-    for (; released != release_order_.end() && last_reader_[*released] <= c; ++released) contact_tables_[*released].release();
+    for (; released != release_order_.end() && last_reader_[*released] <= c; ++released)
+      contact_tables_[*released].release();
   };
   release_tables_read_last_by(-1);
 
@@ -551,7 +558,8 @@ std::array<int, 3> SoftEngine::list_wall_contacts_to_evaluate(int first, int end
     const unsigned touching[3] = {lane_bits(xs * xs + ys * ys > side_limit * side_limit), lane_bits(zs - bottom_z < r),
                                   lane_bits(top_z - zs < r)};
     for (int wall = side; wall <= top; ++wall) {
-      append_lanes<R>(s, touching[wall] | nonzero_bits<R>(wall_contacts_[wall].data() + s), out[wall].data(), count[wall]);
+      append_lanes<R>(s, touching[wall] | nonzero_bits<R>(wall_contacts_[wall].data() + s), out[wall].data(),
+                      count[wall]);
     }
   });
   for (int wall = side; wall <= top; ++wall) pad_lanes<Real>(out[wall].data(), count[wall]);
@@ -656,8 +664,8 @@ ContactHistory<Real> SoftEngine::gather_histories(const ContactTable& contacts, 
 }
 
 template <class Real>
-void SoftEngine::book_contact(const ContactForce<Real>& f, const Vec3<Real>& torque, const ContactHistory<Real>& h, int l,
-                              bool touching, double overlap_ratio, int& open, ContactTable& contacts,
+void SoftEngine::book_contact(const ContactForce<Real>& f, const Vec3<Real>& torque, const ContactHistory<Real>& h,
+                              int l, bool touching, double overlap_ratio, int& open, ContactTable& contacts,
                               ChunkTotals& totals, ChunkWrenches& on_chunk, int slot) {
   const Vec3<double> force = lane(f.force_N, l), on_sphere = lane(torque, l);
   on_chunk.fx[slot] += force.x;
@@ -671,7 +679,8 @@ void SoftEngine::book_contact(const ContactForce<Real>& f, const Vec3<Real>& tor
   totals.elastic_J += lane(f.elastic_J, l);
   if (touching) {
     if (open == ContactTable::none) open = contacts.open();
-    contacts[open] = {lane(h.tangential_displacement_m, l), lane(h.tangential_force_N, l), lane(h.normal_damping_force_N, l)};
+    contacts[open] = {lane(h.tangential_displacement_m, l), lane(h.tangential_force_N, l),
+                      lane(h.normal_damping_force_N, l)};
     totals.record_contact(overlap_ratio);
   } else if (open != ContactTable::none) {
     contacts.close(open);  // came apart: no reaction, and the spring has let go
@@ -705,7 +714,8 @@ void SoftEngine::add_reactions() {
 #pragma omp parallel
   {
     const int threads = omp_get_num_threads(), thread = omp_get_thread_num();
-    add_on(chunk_count() * thread / threads * chunk_size, std::min(n, chunk_count() * (thread + 1) / threads * chunk_size));
+    add_on(chunk_count() * thread / threads * chunk_size,
+           std::min(n, chunk_count() * (thread + 1) / threads * chunk_size));
   }
 }
 
@@ -714,8 +724,12 @@ void SoftEngine::add_host_forces() {
   // The forces act at the end of the step (the damper on the half-step velocity, as the
   // contacts' dashpots); the books take the trapezoid of each over the step's displacements.
   const double y = host_model_.base_position_m(t_s_);
-  const HostForces now{host_.z_m - y, host_.v_m_s - host_model_.base_velocity_m_s(t_s_),
-                       host_model_.applied_force_N(t_s_), host_particle_force_N_, host_.z_m, y};
+  const HostForces now{host_.z_m - y,
+                       host_.v_m_s - host_model_.base_velocity_m_s(t_s_),
+                       host_model_.applied_force_N(t_s_),
+                       host_particle_force_N_,
+                       host_.z_m,
+                       y};
   host_other_force_N_ = host_model_.force_N(t_s_, host_);
   const HostForces& before = previous_host_forces_;
   const double dz = now.z_m - before.z_m, dy = now.base_m - before.base_m;
@@ -783,7 +797,9 @@ EngineStatistics SoftEngine::statistics() const {
           {"neighbour_rebuilds", neighbours_.rebuilds()},
           {"neighbour_pairs", neighbours_.size()},
           {"max_overlap_ppm_of_radius", std::llround(max_overlap_ratio_ * 1e6)},
-          {"simd_lanes", simd_path_ == SimdPath::avx512 ? 8 : simd_path_ == SimdPath::avx2 ? 4 : 2},
+          {"simd_lanes", simd_path_ == SimdPath::avx512 ? 8
+                         : simd_path_ == SimdPath::avx2 ? 4
+                                                        : 2},
           {"threads_used", runs_in_parallel() ? omp_get_max_threads() : 1}};
 }
 
@@ -792,8 +808,9 @@ std::vector<std::string> SoftEngine::warnings() const {
   if (max_overlap_ratio_ <= overlap_warning_ratio) return {};
   std::ostringstream msg;
   msg.precision(3);
-  msg << "contacts overlapped up to " << 100.0 * max_overlap_ratio_ << " % of a sphere radius (t = "
-      << max_overlap_time_s_ << " s): the contact law is soft for these impacts, so results depend on k_n there";
+  msg << "contacts overlapped up to " << 100.0 * max_overlap_ratio_
+      << " % of a sphere radius (t = " << max_overlap_time_s_
+      << " s): the contact law is soft for these impacts, so results depend on k_n there";
   return {msg.str()};
 }
 

@@ -56,10 +56,14 @@ RunSummary read_summary(const sqlite::Statement& row) {
 
 std::string_view to_string(RunStatus status) {
   switch (status) {
-    case RunStatus::running: return "running";
-    case RunStatus::completed: return "completed";
-    case RunStatus::failed: return "failed";
-    case RunStatus::interrupted: break;
+    case RunStatus::running:
+      return "running";
+    case RunStatus::completed:
+      return "completed";
+    case RunStatus::failed:
+      return "failed";
+    case RunStatus::interrupted:
+      break;
   }
   return "interrupted";
 }
@@ -144,12 +148,13 @@ std::int64_t RunStore::save_initial_state(const std::string& settle_key, const P
       .bind(6, utc_now_iso8601());
   state.run();
   const std::int64_t id = db_.last_insert_rowid();
-  sqlite::Statement particle(db_,
-                             "INSERT INTO initial_particles VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  sqlite::Statement particle(db_, "INSERT INTO initial_particles VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   for (Eigen::Index i = 0; i < p.size(); ++i) {
     particle.bind(1, id).bind(2, static_cast<std::int64_t>(i));
     for (int c = 0; c < 3; ++c) {
-      particle.bind(3 + c, p.position_m(c, i)).bind(6 + c, p.velocity_m_s(c, i)).bind(9 + c, p.angular_velocity_rad_s(c, i));
+      particle.bind(3 + c, p.position_m(c, i))
+          .bind(6 + c, p.velocity_m_s(c, i))
+          .bind(9 + c, p.angular_velocity_rad_s(c, i));
     }
     particle.bind(12, p.radius_m[i]).bind(13, p.mass_kg[i]);
     particle.run();
@@ -203,9 +208,10 @@ void RunStore::save_statistics(std::int64_t run_id, const EngineStatistics& stat
 
 void RunStore::save_calibration(std::int64_t run_id, const RestitutionTable& table) {
   sqlite::Transaction transaction(db_);
-  sqlite::Statement insert(db_,
-                           "INSERT INTO calibrations (run_id, contact, impact_speed_m_s, en, beta0) VALUES (?, ?, ?, ?, ?)");
-  for (const auto& [contact, curve] : {std::pair{"sphere_sphere", &table.sphere_sphere}, std::pair{"sphere_wall", &table.sphere_wall}}) {
+  sqlite::Statement insert(
+      db_, "INSERT INTO calibrations (run_id, contact, impact_speed_m_s, en, beta0) VALUES (?, ?, ?, ?, ?)");
+  for (const auto& [contact, curve] :
+       {std::pair{"sphere_sphere", &table.sphere_sphere}, std::pair{"sphere_wall", &table.sphere_wall}}) {
     for (std::size_t k = 0; k < curve->impact_speed_m_s.size(); ++k) {
       insert.bind(1, run_id)
           .bind(2, std::string_view(contact))

@@ -168,11 +168,10 @@ int main(int argc, char** argv) {
         "events/s %.3e  stale/event %.2f  host impulses %.0f  re-predictions per impulse %.2f  near sweeps %lld  "
         "bytes/sphere %.0f  energy change %.1e  balance error %.1e  clock %.2f GHz  "
         "core share %.2f (lowest %.2f)\n",
-        n, free_host ? "free" : "fixed", scenario.cavity.diameter_m, done, wall, done / wall, static_cast<double>(events) / wall,
-        static_cast<double>(statistic(engine, "events_stale")) / static_cast<double>(events + start_events),
-        impulses,
-        impulses > 0 ? repredictions / impulses : 0.0,
-        static_cast<long long>(statistic(engine, "near_sweeps")),
+        n, free_host ? "free" : "fixed", scenario.cavity.diameter_m, done, wall, done / wall,
+        static_cast<double>(events) / wall,
+        static_cast<double>(statistic(engine, "events_stale")) / static_cast<double>(events + start_events), impulses,
+        impulses > 0 ? repredictions / impulses : 0.0, static_cast<long long>(statistic(engine, "near_sweeps")),
         1024.0 * static_cast<double>(rss_after - rss_before) / n, std::abs(total_energy(engine) - e0) / e0,
         engine.observe().energy.balance_relative_error(e0), median(clock_GHz), median(core_share),
         *std::min_element(core_share.begin(), core_share.end()));

@@ -23,7 +23,10 @@ class CellMembers {
   static constexpr int inline_capacity = 3;
 
   CellMembers(int cell_count, int particle_count)
-      : cells_(cell_count), overflow_(cell_count, none), next_(particle_count, none), prev_(particle_count, none),
+      : cells_(cell_count),
+        overflow_(cell_count, none),
+        next_(particle_count, none),
+        prev_(particle_count, none),
         cell_(particle_count, none) {}
 
   void insert(int particle, int cell) {

@@ -32,7 +32,7 @@ inline Mobility operator+(const Mobility& x, const Mobility& y) {
 
 struct CollisionOutcome {
   Eigen::Vector3d impulse_N_s = Eigen::Vector3d::Zero();  ///< on the first body; the partner takes −impulse
-  double impact_J = 0.0;    ///< energy lost to the normal impulse, ½ (1 − e) λ u_n
+  double impact_J = 0.0;                                  ///< energy lost to the normal impulse, ½ (1 − e) λ u_n
   double friction_J = 0.0;  ///< energy lost to the tangential impulse; impact + friction = the total loss
   bool sticking = false;    ///< the tangential impulse was below μ times the normal one
 };

@@ -99,7 +99,8 @@ struct FaceTimes {
     return {time_to_close(lower_gap, rate, accel), time_to_close(upper_gap, -rate, -accel)};
   }
   const Lanes2 zero{}, none = zero + never;
-  const auto falling = rate < 0.0, rising = rate > 0.0;
+  const auto falling = rate < 0.0;
+  const auto rising = rate > 0.0;
   Lanes2 gap = select(falling, lower_gap, upper_gap);
   gap = select(gap < 0.0, zero, gap);
   const Lanes2 speed = select(falling, -rate, rate);
@@ -130,7 +131,9 @@ struct PairQuadratic {
     return (b < -min_approach_speed_m_s * contact_distance_m) & ((c <= 0) | (discriminant >= 0));
   }
   /// When they meet (0 if they overlap), given meets().
-  double time_s() const { return c <= 0 ? 0.0 : c / (std::sqrt(discriminant) - b); }  // the smaller root, without cancellation
+  double time_s() const {
+    return c <= 0 ? 0.0 : c / (std::sqrt(discriminant) - b);
+  }  // the smaller root, without cancellation
 };
 
 /// The first s ≥ 0 at which two spheres, centres dx = x_i − x_j apart moving with

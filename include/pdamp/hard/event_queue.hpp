@@ -57,21 +57,21 @@ enum class EventKind : std::uint8_t {
 /// forgets all of i's events (EventQueue::forget).
 struct Event {
   double t_s;
-  std::int32_t i;          ///< the particle (−1 for bed_release)
+  std::int32_t i;  ///< the particle (−1 for bed_release)
   /// The partner particle, the crossed face, or the tier a host_margin is of (its descent
   /// resumes there); ≥ 0.
   std::int32_t j;
-  std::uint32_t count_j;   ///< j's counter (sphere_sphere), i's host stamp (caps, rider, host_margin) or the host epoch (bed_release)
+  std::uint32_t count_j;  ///< j's counter (sphere_sphere), i's host stamp (caps, rider, host_margin) or the host epoch
+                          ///< (bed_release)
   EventKind kind;
 };
 
 /// Whether an event's count_j is its sphere's host stamp (see Event::count_j).
 /// A mask, not a chain of comparisons: the kinds of successive events are a coin toss.
 constexpr bool carries_host_stamp(EventKind kind) {
-  constexpr unsigned stamped = 1u << static_cast<unsigned>(EventKind::bottom_cap) |
-                               1u << static_cast<unsigned>(EventKind::top_cap) |
-                               1u << static_cast<unsigned>(EventKind::rider) |
-                               1u << static_cast<unsigned>(EventKind::host_margin);
+  constexpr unsigned stamped =
+      1u << static_cast<unsigned>(EventKind::bottom_cap) | 1u << static_cast<unsigned>(EventKind::top_cap) |
+      1u << static_cast<unsigned>(EventKind::rider) | 1u << static_cast<unsigned>(EventKind::host_margin);
   return (stamped >> static_cast<unsigned>(kind)) & 1u;
 }
 
@@ -111,7 +111,8 @@ class EventQueue {
   /// events with i for partner may now be out of date.
   void forget(int i) {
     // Rare: a collision changes both trajectories before it predicts either.
-    if (fresh_filled_) [[unlikely]] stale_fresh_lists();
+    if (fresh_filled_) [[unlikely]]
+      stale_fresh_lists();
     lists_[i].clear();
     mark_dirty(i);
     keyed_[i].fresh = 1;
@@ -202,7 +203,7 @@ class EventQueue {
     std::uint32_t index = 0;    ///< the event's position in the owner's list
     std::uint32_t slot = 0;     ///< its bucket's slot (place bucket)
     Place place = Place::none;
-    std::uint8_t dirty = 0;     ///< re-key at the next top()
+    std::uint8_t dirty = 0;  ///< re-key at the next top()
     /// Every event in the owner's list was entered since its trajectory last changed, and
     /// nothing any of them depends on has changed since: re-keying need not look at them.
     std::uint8_t fresh = 0;
@@ -243,7 +244,8 @@ class EventQueue {
     std::size_t best = 0;
     for (std::size_t k = 0; k < list.size();) {
 #ifndef NDEBUG
-      if (fresh && !current(event_of(owner, list[k]))) throw std::logic_error("an event of a fresh list is out of date");
+      if (fresh && !current(event_of(owner, list[k])))
+        throw std::logic_error("an event of a fresh list is out of date");
 #endif
       if (!fresh && !current(event_of(owner, list[k]))) {
         list[k] = list.back();
@@ -386,8 +388,8 @@ class EventQueue {
   Event top_{};                             ///< what top() last returned
   std::vector<Keyed> keyed_;
   std::vector<Link> links_;
-  std::vector<int> dirty_;                ///< owners whose events changed since the last top()
-  std::uint8_t fresh_filled_ = 0;         ///< an event was entered in a fresh list since the last top()
+  std::vector<int> dirty_;         ///< owners whose events changed since the last top()
+  std::uint8_t fresh_filled_ = 0;  ///< an event was entered in a fresh list since the last top()
   /// The first owner in each later bucket's list (its slot: the bucket modulo their number).
   std::vector<std::int32_t> buckets_;
   Heap current_;  ///< entries of the current bucket (and any earlier: see enter)

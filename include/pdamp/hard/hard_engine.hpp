@@ -34,9 +34,9 @@
 /// holds it (merge_jam).
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <span>
-#include <cstdint>
 #include <vector>
 
 #include "pdamp/hard/cell_members.hpp"
@@ -236,8 +236,8 @@ class HardEngine final : public Engine {
   struct MarginTier {
     ParticleSet members;
     double margin_m;
-    double horizon_s;         ///< τ: how far ahead its predictions look
-    double budget_m = 0.0;    ///< how far the host may have strayed since the last sweep
+    double horizon_s;       ///< τ: how far ahead its predictions look
+    double budget_m = 0.0;  ///< how far the host may have strayed since the last sweep
     double t_last_sweep_s = 0.0;
     std::int64_t sweeps = 0, repredictions = 0;
   };
@@ -272,8 +272,8 @@ class HardEngine final : public Engine {
   CellMembers free_cells_;   ///< free spheres by lab cell
   CellMembers rider_cells_;  ///< riding spheres by host-frame cell
   EventQueue queue_;
-  std::vector<int> neighbours_;  ///< predict's scratch: the free spheres around the one predicted
-  ScreenResult screen_result_;  ///< predict's scratch: the contact tests of those neighbours
+  std::vector<int> neighbours_;       ///< predict's scratch: the free spheres around the one predicted
+  ScreenResult screen_result_;        ///< predict's scratch: the contact tests of those neighbours
   std::vector<int> riders_searched_;  ///< predict_host_relative's scratch: the riders its exact search saw
   double contact_tolerance_m_;
   double max_radius_m_;
@@ -290,8 +290,8 @@ class HardEngine final : public Engine {
     HostState state;
   };
   mutable HostNow host_now_{-never, 0, {}};  ///< host_now()'s last answer
-  double host_speed_envelope_m_s_ = 0.0;  ///< ≥ the speed bound of every trajectory since the last rebuild
-  double trajectory_riding_mass_kg_ = 0.0;  ///< the riding mass host_ was built with
+  double host_speed_envelope_m_s_ = 0.0;     ///< ≥ the speed bound of every trajectory since the last rebuild
+  double trajectory_riding_mass_kg_ = 0.0;   ///< the riding mass host_ was built with
   double t_s_ = 0.0;
   double t_host_booked_s_ = 0.0;
   double riding_mass_kg_ = 0.0;
@@ -304,8 +304,8 @@ class HardEngine final : public Engine {
 
   struct Statistics {
     std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
-                 host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, jammed = 0, host_impulses = 0,
-                 jam_merges = 0, jam_merged_spheres = 0, jam_stuck_to_host = 0,
+                 host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, jammed = 0,
+                 host_impulses = 0, jam_merges = 0, jam_merged_spheres = 0, jam_stuck_to_host = 0,
                  touching_repredictions = 0, touching_deferrals = 0, rebuilds = 0;
   } stats_;
   /// Whether predict asks for all the neighbours' records at once before screening them:

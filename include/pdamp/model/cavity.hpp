@@ -29,8 +29,8 @@ class Cavity {
   WallGap side(const Eigen::Vector3d& centre, double radius_m) const {
     const double rho = std::sqrt(centre.x() * centre.x() + centre.y() * centre.y());
     // On the axis every direction is as good; a sphere there cannot touch the side anyway.
-    const Eigen::Vector3d inward = rho > 0 ? Eigen::Vector3d(-centre.x() / rho, -centre.y() / rho, 0.0)
-                                           : Eigen::Vector3d(-1.0, 0.0, 0.0);
+    const Eigen::Vector3d inward =
+        rho > 0 ? Eigen::Vector3d(-centre.x() / rho, -centre.y() / rho, 0.0) : Eigen::Vector3d(-1.0, 0.0, 0.0);
     return {radius_m_ - rho - radius_m, inward};
   }
   WallGap bottom(const Eigen::Vector3d& centre, double radius_m, double host_z_m) const {
@@ -41,9 +41,12 @@ class Cavity {
   }
   WallGap gap(Wall wall, const Eigen::Vector3d& centre, double radius_m, double host_z_m) const {
     switch (wall) {
-      case Wall::side: return side(centre, radius_m);
-      case Wall::bottom: return bottom(centre, radius_m, host_z_m);
-      case Wall::top: break;
+      case Wall::side:
+        return side(centre, radius_m);
+      case Wall::bottom:
+        return bottom(centre, radius_m, host_z_m);
+      case Wall::top:
+        break;
     }
     return top(centre, radius_m, host_z_m);
   }

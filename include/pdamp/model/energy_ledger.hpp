@@ -12,16 +12,16 @@ struct EnergyLedger {
   // Energy stored at this instant (J).
   double particle_translational_J = 0.0;
   double particle_rotational_J = 0.0;
-  double host_kinetic_J = 0.0;             ///< ½ M z'² (for prescribed motion: M is the nominal mass, not counted in E)
-  double spring_potential_J = 0.0;         ///< ½ K (z − y)²
+  double host_kinetic_J = 0.0;      ///< ½ M z'² (for prescribed motion: M is the nominal mass, not counted in E)
+  double spring_potential_J = 0.0;  ///< ½ K (z − y)²
   double gravitational_potential_J = 0.0;  ///< −Σ m g·x of the particles (origin: cavity bottom centre at z = 0)
   double contact_elastic_J = 0.0;          ///< elastic energy stored in soft contacts (normal + tangential)
 
   // Cumulative since t = 0 (J).
-  double excitation_work_J = 0.0;       ///< work fed in by the excitation (base, force or prescribed motion)
-  double dissipated_impact_J = 0.0;     ///< normal contact losses (dashpot, restitution)
-  double dissipated_friction_J = 0.0;   ///< tangential losses (dashpot, Coulomb sliding, tangential restitution)
-  double dissipated_viscous_J = 0.0;    ///< host damper C
+  double excitation_work_J = 0.0;      ///< work fed in by the excitation (base, force or prescribed motion)
+  double dissipated_impact_J = 0.0;    ///< normal contact losses (dashpot, restitution)
+  double dissipated_friction_J = 0.0;  ///< tangential losses (dashpot, Coulomb sliding, tangential restitution)
+  double dissipated_viscous_J = 0.0;   ///< host damper C
 
   bool host_counts = true;  ///< false for a prescribed-motion host, whose energy is not part of E
 

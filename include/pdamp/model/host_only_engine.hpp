@@ -3,8 +3,8 @@
 /// a scenario has no particles; it is the reference the engines' host coupling is
 /// tested against.
 
-#include "pdamp/model/host.hpp"
 #include "pdamp/model/engine.hpp"
+#include "pdamp/model/host.hpp"
 
 namespace pdamp {
 

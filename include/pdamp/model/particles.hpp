@@ -8,8 +8,8 @@
 namespace pdamp {
 
 struct Particles {
-  Eigen::Matrix3Xd position_m;               ///< lab frame, origin at the cavity's bottom centre when z_host = 0
-  Eigen::Matrix3Xd velocity_m_s;             ///< lab frame
+  Eigen::Matrix3Xd position_m;    ///< lab frame, origin at the cavity's bottom centre when z_host = 0
+  Eigen::Matrix3Xd velocity_m_s;  ///< lab frame
   Eigen::Matrix3Xd angular_velocity_rad_s;
   Eigen::VectorXd radius_m;
   Eigen::VectorXd mass_kg;

@@ -22,8 +22,7 @@ double solid_fraction(const CavitySettings& cavity, const Particles& particles);
 /// Places `settings.count` spheres with the cavity bottom at z = host_z_m, at rest.
 /// Diameters are uniform in [diameter_min_m, diameter_max_m]. Throws InputError if
 /// they do not fit.
-Particles place_particles(const ParticleSettings& settings, const CavitySettings& cavity,
-                          double host_z_m);
+Particles place_particles(const ParticleSettings& settings, const CavitySettings& cavity, double host_z_m);
 
 /// Moves overlapping spheres apart — bottom up, each out of the spheres it rests on along
 /// the line of centres, side-by-side pairs half each, and out of the walls — until no two

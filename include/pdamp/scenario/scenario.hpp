@@ -18,8 +18,8 @@ struct HostSettings {
   double mass_kg = 0.0376;
   double stiffness_N_m = 470.0;
   double damping_N_s_m = 0.1;
-  double z0_m = 0.0157;   ///< initial displacement
-  double v0_m_s = 0.0;    ///< initial velocity
+  double z0_m = 0.0157;  ///< initial displacement
+  double v0_m_s = 0.0;   ///< initial velocity
 };
 
 enum class ExcitationMode {
@@ -117,9 +117,7 @@ struct Scenario {
   /// gives back an identical scenario; the store keeps it with each run.
   std::string canonical_text;
 
-  bool host_has_infinite_mass() const {
-    return excitation.mode == ExcitationMode::prescribed_motion;
-  }
+  bool host_has_infinite_mass() const { return excitation.mode == ExcitationMode::prescribed_motion; }
 };
 
 }  // namespace pdamp

@@ -7,15 +7,15 @@
 #include <string>
 #include <string_view>
 
-#include "pdamp/model/engine.hpp"
 #include "pdamp/analysis/cycle_analyzer.hpp"
 #include "pdamp/analysis/recorder.hpp"
+#include "pdamp/model/engine.hpp"
 #include "pdamp/store/run_store.hpp"
 
 namespace pdamp {
 
 struct RunControl {
-  const std::atomic<bool>* stop = nullptr;  ///< when it becomes true the run ends as interrupted
+  const std::atomic<bool>* stop = nullptr;   ///< when it becomes true the run ends as interrupted
   std::function<void(double t_s)> progress;  ///< called about twice a second of wall time
 };
 

@@ -46,8 +46,8 @@ struct ContactKinematics {
 /// The force on body i at one contact, and the energy it moved this step.
 template <class Real>
 struct ContactForce {
-  Vec3<Real> force_N;       ///< on body i (body j gets the opposite)
-  Vec3<Real> tangential_N;  ///< tangential part of force_N, for the torques −l n × f_s
+  Vec3<Real> force_N;            ///< on body i (body j gets the opposite)
+  Vec3<Real> tangential_N;       ///< tangential part of force_N, for the torques −l n × f_s
   Real elastic_J;                ///< energy stored in the contact after the step
   Real dissipated_normal_J;      ///< this step's impact loss
   Real dissipated_tangential_J;  ///< this step's friction loss
@@ -58,8 +58,9 @@ struct ContactForce {
 /// closed: its books are balanced (the spring's leftover energy goes to friction) and its
 /// history cleared. Written without branches on the contact, each `if` a select.
 template <class Real>
-[[gnu::always_inline]] inline ContactForce<Real> evaluate_contact(const SoftContactLaw& law, const ContactKinematics<Real>& k,
-                                                                  double dt_s, ContactHistory<Real>& h) {
+[[gnu::always_inline]] inline ContactForce<Real> evaluate_contact(const SoftContactLaw& law,
+                                                                  const ContactKinematics<Real>& k, double dt_s,
+                                                                  ContactHistory<Real>& h) {
   const Vec3<Real>& n = k.normal;
   const Real closing_speed = -dot(k.velocity, n);  // δ'
   const Vec3<Real> tangential_velocity = k.velocity + closing_speed * n;
@@ -100,8 +101,8 @@ template <class Real>
 
   // Trapezoids of the forces over the displacements the integrator made this step.
   out.dissipated_normal_J = 0.5 * (h.normal_damping_force_N + damping_force) * overlap_change_m;
-  out.dissipated_tangential_J = -0.5 * dot(h.tangential_force_N + fs, slip_m) -
-                                (0.5 * law.ks_N_m * squared_norm(xi) - spring_energy_before);
+  out.dissipated_tangential_J =
+      -0.5 * dot(h.tangential_force_N + fs, slip_m) - (0.5 * law.ks_N_m * squared_norm(xi) - spring_energy_before);
   h.tangential_displacement_m = xi;
   h.tangential_force_N = fs;
   h.normal_damping_force_N = damping_force;

@@ -112,9 +112,8 @@ template <class Real>
 /// is one instruction, not a trip through memory).
 template <class Real, class F>
 [[gnu::always_inline]] inline void for_each_lane(const F& f) {
-  [&]<int... l>(std::integer_sequence<int, l...>) {
-    (f(std::integral_constant<int, l>{}), ...);
-  }(std::make_integer_sequence<int, lane_count<Real>>{});
+  [&]<int... l>(std::integer_sequence<int, l...>) { (f(std::integral_constant<int, l>{}), ...); }
+  (std::make_integer_sequence<int, lane_count<Real>>{});
 }
 
 /// One value per lane, value(l) for lane l, built in registers.
@@ -123,9 +122,8 @@ template <class Real, class Value>
   if constexpr (lane_count<Real> == 1) {
     return value(std::integral_constant<int, 0>{});
   } else {
-    return [&]<int... l>(std::integer_sequence<int, l...>) {
-      return Real{value(std::integral_constant<int, l>{})...};
-    }(std::make_integer_sequence<int, lane_count<Real>>{});
+    return [&]<int... l>(std::integer_sequence<int, l...>) { return Real{value(std::integral_constant<int, l>{})...}; }
+    (std::make_integer_sequence<int, lane_count<Real>>{});
   }
 }
 
@@ -218,7 +216,9 @@ template <class Real, class Row>
   } else {
     const Fields4<Lanes4> low = load_records<Lanes4>(row);
     const Fields4<Lanes4> high = load_records<Lanes4>([&](int l) { return row(l + 4); });
-    auto join = [](Lanes4 first, Lanes4 second) { return __builtin_shufflevector(first, second, 0, 1, 2, 3, 4, 5, 6, 7); };
+    auto join = [](Lanes4 first, Lanes4 second) {
+      return __builtin_shufflevector(first, second, 0, 1, 2, 3, 4, 5, 6, 7);
+    };
     return {join(low.a, high.a), join(low.b, high.b), join(low.c, high.c), join(low.d, high.d)};
   }
 }

@@ -77,7 +77,7 @@ class NeighbourList {
 
   CellGrid grid_;
   double skin_m_;
-  std::vector<int> cell_first_;      ///< spheres of the cell ranked r: [cell_first_[r], cell_first_[r + 1])
+  std::vector<int> cell_first_;  ///< spheres of the cell ranked r: [cell_first_[r], cell_first_[r + 1])
   std::vector<int> order_;
   std::vector<int> first_, pairs_, contact_;
   /// During a build: the cells of each part, [part_cell_[p], part_cell_[p + 1]) by rank;

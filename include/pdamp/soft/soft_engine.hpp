@@ -118,7 +118,7 @@ class SoftEngine final : public Engine {
   /// returns how many.
   template <class Real>
   [[gnu::always_inline]] inline std::array<int, 3> list_wall_contacts_to_evaluate(int first, int end,
-                                                                                 WallLists& out) const;
+                                                                                  WallLists& out) const;
   /// Evaluates the pairs `pairs[0, count)` of chunk c (count ≤ lanes; `pairs` holds a
   /// register's worth), adding to the chunk's wrenches and writing the reactions of those
   /// touching at `reactions[touching_pairs++]`.
@@ -133,7 +133,7 @@ class SoftEngine final : public Engine {
   /// The history of entry[l] of the table, in lane l.
   template <class Real>
   [[gnu::always_inline]] static inline ContactHistory<Real> gather_histories(const ContactTable& contacts,
-                                                                            const int* entry);
+                                                                             const int* entry);
   /// Adds lane l of a contact evaluated for the sphere in `slot` of its chunk: its force and
   /// torque (which acts with the opposite sign), its energy, and its history, opened, kept
   /// or closed at `open`.

@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "pdamp/analysis/recorder.hpp"
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
 #include "pdamp/model/restitution.hpp"
-#include "pdamp/analysis/recorder.hpp"
 #include "pdamp/store/sqlite.hpp"
 
 namespace pdamp {
@@ -28,9 +28,9 @@ struct NewRun {
   std::uint64_t seed = 0;
   int n_particles = 0;
   double duration_s = 0.0;
-  std::optional<double> dt_s;  ///< time step of a time-stepped engine
+  std::optional<double> dt_s;                    ///< time step of a time-stepped engine
   std::optional<std::int64_t> initial_state_id;  ///< the settled bed the run started from
-  double solid_fraction = 0.0;  ///< the spheres' volume over the hole's
+  double solid_fraction = 0.0;                   ///< the spheres' volume over the hole's
 };
 
 /// A settled bed kept for other runs (and the other engine) to start from.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Hard-engine benchmark (README, "The hard-sphere engine"):
+# Hard-engine benchmark (docs/benchmarks.md, "Hard engine"):
 #   1. pdamp_bench: elastic frictionless spheres, no gravity, closed cylinder, solid
 #      fraction 0.3, N = 1,000 / 10,000 / 100,000 — collisions per second on one core,
 #      memory per sphere, energy error; with a fixed host, then with a free host, where

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's "Results": the paper's cases on both models, into build/report/paper.sqlite
+# "Results" in docs/comparison-and-results.md: the paper's cases on both models, into build/report/paper.sqlite
 # (or --db FILE); each case settles its bed once and every later run starts from it.
 #   - Table 1: pdamp compare with constant and with calibrated restitution (1.5 s);
 #   - Table 2: pdamp compare, calibrated, first 0.05 s (the hard model is slow on this bed);

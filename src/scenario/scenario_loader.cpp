@@ -260,7 +260,7 @@ const std::vector<KeySpec>& key_specs() {
                      reject(v, "must be constant or calibrated");
                  },
                  ""});
-    // The hard engine's resting-bed parameters (README, "Resting beds and inelastic collapse").
+    // The hard engine's resting-bed parameters (docs/hard-engine.md, "Resting beds and inelastic collapse").
     k.push_back({"hard.rest_speed_m_s", "0.005", "m/s",
                  "a sphere leaving the floor, top cap or a resting sphere slower than this (relative to the host) "
                  "while the host's acceleration presses it there comes to rest and rides with the host",

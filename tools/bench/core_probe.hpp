@@ -4,12 +4,11 @@
 /// On a shared virtual machine the physical core's other hardware thread may belong to
 /// another tenant. When that thread is busy it takes issue slots from this one: code that
 /// issues several instructions a cycle (the hard engine does) slows by up to a half within
-/// seconds, while the clock, and any single dependent chain, stays put. On the
-/// development machine this is much of what made the same build's figures swing by
-/// 20-40 %, not all: the probe sees the integer units only, and the other thread also
-/// shares the L2 and the floating-point units (in one phase the gas ran 15 % slow at a
-/// full integer share). A low share explains a slow figure; a full one does not certify
-/// a fast one.
+/// seconds, while the clock, and any single dependent chain, stays put. That explains
+/// much of the development machine's swings, not all: the probe sees the integer units
+/// only, and the other thread also shares the L2 and the floating-point units
+/// (docs/benchmarks.md, "Timing on this machine"). A low share explains a slow figure; a
+/// full one does not certify a fast one.
 ///
 /// Two timed loops of integer additions tell the two apart: one dependent chain runs one
 /// addition a cycle whatever the other thread does (the clock); four independent chains

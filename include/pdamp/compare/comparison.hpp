@@ -1,6 +1,7 @@
 #pragma once
-/// The metrics that compare a soft and a hard run of one scenario from one bed (README,
-/// "Comparing the models"), computed from what the store holds of the two runs.
+/// The metrics that compare a soft and a hard run of one scenario from one bed
+/// (docs/comparison-and-results.md, "Metrics"), computed from what the store holds of the
+/// two runs.
 
 #include <cstdint>
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-/// The event-driven hard-sphere engine (README, "The hard-sphere engine").
+/// The event-driven hard-sphere engine (docs/hard-engine.md).
 ///
 /// Spheres fly on exact parabolas and are advanced lazily: each keeps the time its
 /// position and velocity refer to, and only the spheres an event involves are moved.
@@ -309,13 +309,12 @@ class HardEngine final : public Engine {
                  touching_repredictions = 0, touching_deferrals = 0, rebuilds = 0;
   } stats_;
   /// Whether predict asks for all the neighbours' records at once before screening them:
-  /// only where the records outgrow the L2 cache (the gas: −4 % at N = 1,000, where they
-  /// are in cache; +1 to +5 % at 10⁴, +9 % at 10⁵). Last in the class: among predict's
-  /// members it shifted their layout, and the gas at N = 1,000 ran 17 % slower.
+  /// only where the records outgrow the L2 cache (below that the prefetches only cost
+  /// instructions). Last in the class: among predict's members it shifts their layout and
+  /// slows the gas (tools/bench/HISTORY.md).
   bool prefetch_records_ = false;
   /// Whether a sphere–sphere collision asks for the cells around both spheres before
-  /// it predicts them: only where the cells outgrow the L2 cache (the gas: +3 to +5 % at
-  /// N = 10⁵; at 10⁴, where they are in cache, −8 %).
+  /// it predicts them: only where the cells outgrow the L2 cache, as for the records.
   bool prefetch_cells_ = false;
 };
 

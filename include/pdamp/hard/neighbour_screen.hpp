@@ -6,8 +6,8 @@
 /// PairQuadratic::of on Ballistic::position_at and velocity_at (the project is built
 /// without floating-point contraction), so the answer is the same bits whichever
 /// instruction set runs it, chosen once at run time: AVX2, or the baseline's SSE2 (four
-/// lanes in pairs of registers). (An eight-lane AVX-512 screen measured no faster: the
-/// screen waits on its loads more than on its arithmetic.)
+/// lanes in pairs of registers). No eight-lane AVX-512 screen: the screen waits on its
+/// loads more than on its arithmetic (tools/bench/HISTORY.md).
 
 #include <Eigen/Core>
 #include <bit>

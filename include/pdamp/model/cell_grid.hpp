@@ -76,8 +76,8 @@ inline int CellGrid::index(const CellCoord& c) const {
   return index_in_period({c.ix, c.iy, remainder < 0 ? remainder + n_z_ : remainder});
 }
 
-// Always inlined: with a sphere–sphere collision working out both spheres' blocks, GCC kept
-// it out of line, and the call cost the hard gas 2 % at N = 1,000.
+// Always inlined: with a sphere–sphere collision working out both spheres' blocks, GCC
+// keeps it out of line otherwise, and the call slows the hard gas (tools/bench/HISTORY.md).
 [[gnu::always_inline]] inline void CellGrid::block(const CellCoord& c, int outside, std::array<int, 27>& out) const {
   // Most cells are inside in x and y, and their layers do not wrap: fixed offsets.
   const int remainder = c.iz % n_z_;

@@ -75,7 +75,7 @@ struct HardContactLaw {
 };
 
 /// How the hard-sphere engine ends bouncing sequences that would otherwise never stop
-/// (README, "Resting beds and inelastic collapse").
+/// (docs/hard-engine.md, "Resting beds and inelastic collapse").
 struct HardRestingSettings {
   /// A sphere that leaves the floor, the top cap or a resting sphere slower than this
   /// (normal speed relative to the host), while the host's acceleration presses it

@@ -29,7 +29,7 @@ struct SoftEngineOptions {
   /// Neighbour-list skin as a fraction of the largest diameter.
   double skin_fraction = 0.2;
   /// Below this many spheres a step is too short to share between threads, which then
-  /// cost more than they save (README, "Threads"): the engine runs on one.
+  /// cost more than they save (docs/benchmarks.md): the engine runs on one.
   int parallel_minimum_spheres = 3000;
   /// The instruction set of the kernels (default_simd_path() if not given); the results
   /// are the same bits on every path.

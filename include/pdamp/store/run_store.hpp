@@ -1,6 +1,6 @@
 #pragma once
 /// The run store: one SQLite file holding many runs. The tables and views below are
-/// pdamp's public SQL interface (documented in the README); the schema is versioned with
+/// pdamp's public SQL interface (documented in docs/store.md); the schema is versioned with
 /// PRAGMA user_version and migrated forward on open.
 
 #include <chrono>

@@ -215,10 +215,11 @@ TEST_CASE("the hard engine's benchmark times a small gas and says what the run w
   CHECK(figure("collisions ") >= 2000);
   CHECK(figure("energy change ") < 1e-12);  // elastic, frictionless, fixed walls
   CHECK(figure("collisions/s ") > 0);
-  // The core probe: a clock any core runs at, and a median share at least the lowest.
+  // The core probe: a clock any core runs at, and a median share at least the lowest. A
+  // probe preempted on a loaded machine measures a share that prints as 0.00.
   CHECK(figure("clock ") > 0.1);
   CHECK(figure("clock ") < 10.0);
-  CHECK(figure("lowest ") > 0.0);
+  CHECK(figure("lowest ") >= 0.0);
   CHECK(figure("core share ") >= figure("lowest "));
 }
 

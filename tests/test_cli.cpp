@@ -1,10 +1,14 @@
 /// End-to-end tests of the pdamp executable: scenario -> run -> store -> query.
 #include <doctest/doctest.h>
 #include <fcntl.h>
+#include <grp.h>
+#include <poll.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -13,52 +17,13 @@
 #include <vector>
 
 #include "pdamp/store/run_store.hpp"
+#include "test_process.hpp"
 #include "test_support.hpp"
 
-extern char** environ;
-
 using namespace pdamp;
+using test::Process;
 
 namespace {
-
-/// An executable (pdamp unless named) started with arguments, its output captured in files.
-class Process {
- public:
-  Process(const std::vector<std::string>& args, const test::TempDir& dir) : Process(PDAMP_EXECUTABLE, args, dir) {}
-  Process(const std::string& executable, const std::vector<std::string>& args, const test::TempDir& dir)
-      : out_(dir / "stdout"), err_(dir / "stderr") {
-    std::vector<std::string> all{executable};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    REQUIRE(posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) == 0);
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  /// Waits for the exit and returns the exit code (128 + signal if killed).
-  int wait() {
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  }
-  void signal(int number) const { kill(pid_, number); }
-  std::string out() const { return slurp(out_); }
-  std::string err() const { return slurp(err_); }
-
- private:
-  static std::string slurp(const std::filesystem::path& file) {
-    std::ifstream in(file);
-    std::ostringstream text;
-    text << in.rdbuf();
-    return text.str();
-  }
-  pid_t pid_ = 0;
-  std::filesystem::path out_, err_;
-};
 
 struct Result {
   int code;
@@ -301,4 +266,295 @@ TEST_CASE("SIGKILL loses nothing committed: the file opens with its samples inta
   sqlite::Statement span(d, "SELECT count(*), max(t_s) FROM samples WHERE run_id = 1");
   REQUIRE(span.step());
   CHECK(span.column_int(0) == std::llround(span.column_double(1) / 1e-5) + 1);
+}
+
+namespace {
+
+std::string file_bytes(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return bytes.str();
+}
+
+/// A store holding one run of the host alone (Table 1, 0.05 s, hard model).
+void store_host_run(const test::TempDir& dir, const std::filesystem::path& db) {
+  REQUIRE(pdamp_cli({"run", "--scenario", table1(), "--model", "hard", "--set", "particles.count=0", "--duration",
+                     "0.05", "--db", db.string()},
+                    dir)
+              .code == 0);
+}
+
+/// Runs pdamp as a user who can read the test directory but write neither it nor its
+/// files: `nobody` when the tests run as root (root writes anything), else the test's
+/// user with the directory and its files made read-only.
+Result pdamp_read_only(const std::vector<std::string>& args, const test::TempDir& dir) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) files.push_back(entry.path());
+  using std::filesystem::perms;
+  for (const auto& f : files)
+    std::filesystem::permissions(f, perms::owner_read | perms::group_read | perms::others_read);
+  std::filesystem::permissions(dir.path(), perms::owner_read | perms::owner_exec | perms::others_read |
+                                               perms::others_exec | perms::group_read | perms::group_exec);
+  const auto out = std::filesystem::temp_directory_path() / ("pdamp-read-only-" + std::to_string(getpid()));
+  test::Argv argv(PDAMP_EXECUTABLE, args);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    const int out_fd = open((out.string() + ".out").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int err_fd = open((out.string() + ".err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out_fd, 1);
+    dup2(err_fd, 2);
+    if (geteuid() == 0 && (setgroups(0, nullptr) != 0 || setgid(65534) != 0 || setuid(65534) != 0)) _exit(126);
+    execv(argv.program(), argv.get());
+    _exit(127);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  std::filesystem::permissions(dir.path(), perms::owner_all, std::filesystem::perm_options::add);
+  Result r{WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), file_bytes(out.string() + ".out"),
+           file_bytes(out.string() + ".err")};
+  std::filesystem::remove(out.string() + ".out");
+  std::filesystem::remove(out.string() + ".err");
+  return r;
+}
+
+/// Runs pdamp with its stderr on a pseudo-terminal for `seconds`, then stops it with
+/// SIGTERM; returns what it wrote to the terminal.
+std::string stderr_on_terminal(const std::vector<std::string>& args, const test::TempDir& dir, double seconds) {
+  const int master = posix_openpt(O_RDWR | O_NOCTTY);
+  REQUIRE(master >= 0);
+  REQUIRE(grantpt(master) == 0);
+  REQUIRE(unlockpt(master) == 0);
+  const std::string terminal = ptsname(master);
+  test::Argv argv(PDAMP_EXECUTABLE, args);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, (dir / "terminal.out").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 2, terminal.c_str(), O_RDWR | O_NOCTTY, 0);
+  pid_t pid = 0;
+  REQUIRE(posix_spawn(&pid, argv.program(), &actions, nullptr, argv.get(), environ) == 0);
+  posix_spawn_file_actions_destroy(&actions);
+  std::string text;
+  const auto start = std::chrono::steady_clock::now();
+  bool stopped = false;
+  for (int status = 0;;) {
+    pollfd ready{master, POLLIN, 0};
+    if (poll(&ready, 1, 50) > 0 && (ready.revents & POLLIN)) {
+      char buffer[4096];
+      if (const ssize_t n = read(master, buffer, sizeof buffer); n > 0)
+        text.append(buffer, static_cast<std::size_t>(n));
+    }
+    if (!stopped && std::chrono::steady_clock::now() - start > std::chrono::duration<double>(seconds)) {
+      kill(pid, SIGTERM);
+      stopped = true;
+    }
+    if (waitpid(pid, &status, WNOHANG) == pid) break;
+  }
+  for (char buffer[4096];;) {  // what is left once it ended
+    pollfd ready{master, POLLIN, 0};
+    if (poll(&ready, 1, 100) <= 0 || !(ready.revents & POLLIN)) break;
+    const ssize_t n = read(master, buffer, sizeof buffer);
+    if (n <= 0) break;
+    text.append(buffer, static_cast<std::size_t>(n));
+  }
+  close(master);
+  return text;
+}
+
+/// Every command that opens a store, with `--db db`.
+std::vector<std::vector<std::string>> store_commands(const std::filesystem::path& db) {
+  std::vector<std::vector<std::string>> commands{
+      {"run", "--scenario", table1(), "--model", "hard", "--set", "particles.count=0", "--duration", "0.01"},
+      {"runs"},
+      {"show", "1"},
+      {"delete", "1"}};
+  for (auto& command : commands) command.insert(command.end(), {"--db", db.string()});
+  return commands;
+}
+
+}  // namespace
+
+TEST_CASE("pdamp delete removes runs with all their rows; their ids are not used again") {
+  test::TempDir dir("cli-delete");
+  const auto db = dir / "runs.sqlite";
+  store_host_run(dir, db);
+  store_host_run(dir, db);
+  const Result deleted = pdamp_cli({"delete", "2", "--db", db.string()}, dir);
+  INFO(deleted.err);
+  CHECK(deleted.code == 0);
+  CHECK(deleted.out ==
+        "deleted run 2: hard model, scenario 'table1', completed (101 samples, 0 cycles, 0 comparisons)\n");
+  CHECK(pdamp_cli({"show", "2", "--db", db.string()}, dir).code == 2);
+  CHECK(count_rows(db, "SELECT count(*) FROM samples WHERE run_id = 2") == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM run_statistics WHERE run_id = 2") == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM samples WHERE run_id = 1") == 101);
+  const Result again = pdamp_cli({"delete", "1", "2", "--db", db.string()}, dir);
+  CHECK(again.code == 2);
+  CHECK(again.err.find("run 2 is not in") != std::string::npos);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs") == 1);  // all or nothing
+  store_host_run(dir, db);
+  CHECK(count_rows(db, "SELECT max(run_id) FROM runs") == 3);
+  const Result none = pdamp_cli({"delete", "--db", db.string()}, dir);
+  CHECK(none.code == 2);
+  CHECK(none.err.find("give the RUN_IDs") != std::string::npos);
+  CHECK(pdamp_cli({"delete", "x1", "--db", db.string()}, dir).err.find("RUN_ID 'x1'") != std::string::npos);
+  const auto missing = dir / "missing.sqlite";
+  CHECK(pdamp_cli({"delete", "1", "--db", missing.string()}, dir).code == 2);
+  CHECK_FALSE(std::filesystem::exists(missing));
+}
+
+TEST_CASE("pdamp runs escapes control characters in names and fits its columns") {
+  test::TempDir dir("cli-runs-names");
+  const auto db = dir / "runs.sqlite";
+  {
+    RunStore store(db);
+    for (const std::string name : {"table1", "evil\x1b[2J\nname\t", "a scenario name far longer than the column"}) {
+      store.finish_run(store.begin_run({"soft", name, "", 1, 0, 1.0}), {RunStatus::completed, "", 1.0, 0.5, 0.0, 0.0});
+    }
+  }
+  const Result runs = pdamp_cli({"runs", "--db", db.string()}, dir);
+  REQUIRE(runs.code == 0);
+  CHECK(runs.out.find('\x1b') == std::string::npos);
+  CHECK(runs.out.find('\t') == std::string::npos);
+  CHECK(runs.out.find("evil\\x1b[2J\\nname\\t") != std::string::npos);
+  CHECK(runs.out.find("a scenario name far longer than the col…") != std::string::npos);
+  // Every line has its status where the header has it (counted in characters).
+  std::istringstream lines(runs.out);
+  std::vector<std::string> all;
+  for (std::string line; std::getline(lines, line);) all.push_back(line);
+  REQUIRE(all.size() == 4);
+  auto column_of = [](const std::string& line, const std::string& word) {
+    const auto at = line.find(word);
+    REQUIRE(at != std::string::npos);
+    return std::count_if(line.begin(), line.begin() + static_cast<std::ptrdiff_t>(at),
+                         [](char c) { return (static_cast<unsigned char>(c) & 0xc0) != 0x80; });
+  };
+  const auto status_column = column_of(all[0], "status");
+  for (std::size_t i = 1; i < all.size(); ++i) CHECK(column_of(all[i], "completed") == status_column);
+  const Result show = pdamp_cli({"show", "2", "--db", db.string()}, dir);
+  CHECK(show.out.find("scenario 'evil\\x1b[2J\\nname\\t'") != std::string::npos);
+}
+
+TEST_CASE("SIGTERM while the bed settles: the run is stored as interrupted") {
+  test::TempDir dir("cli-sigterm-settling");
+  const auto db = dir / "runs.sqlite";
+  Process p({"run", "--scenario", table1(), "--model", "soft", "--db", db.string()}, dir);
+  // The run's row comes before the bed, whose settling takes seconds.
+  for (int i = 0; i < 600; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (std::filesystem::exists(db) && count_rows(db, "SELECT count(*) FROM sqlite_master WHERE name = 'runs'") > 0 &&
+        count_rows(db, "SELECT count(*) FROM runs") > 0) {
+      break;
+    }
+  }
+  p.signal(SIGTERM);
+  CHECK(p.wait() == 128 + SIGTERM);
+  RunStore store(db, StoreAccess::read);
+  const auto s = store.summary(1);
+  REQUIRE(s);
+  CHECK(s->status == "interrupted");
+  CHECK(s->message == "stopped while settling the bed");
+  CHECK(s->n_samples == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM initial_states") == 0);
+}
+
+TEST_CASE("a restitution that cannot be calibrated is refused before the store is touched") {
+  test::TempDir dir("cli-calibration");
+  const auto db = dir / "runs.sqlite";
+  const Result r = pdamp_cli({"run", "--scenario", test::scenario_file("table4_f500").string(), "--model", "hard",
+                              "--set", "hard.restitution=calibrated", "--db", db.string()},
+                             dir);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("hard.restitution = calibrated:") != std::string::npos);
+  CHECK(r.err.find("use [hard] restitution = constant") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(db));
+}
+
+TEST_CASE("another program's database and an empty file are left as they were") {
+  test::TempDir dir("cli-foreign");
+  const auto foreign = dir / "foreign.sqlite", empty = dir / "empty.sqlite";
+  {
+    sqlite::Database d(foreign);
+    d.exec("CREATE TABLE notes (text); INSERT INTO notes VALUES ('mine')");
+  }
+  std::ofstream{empty};
+  const std::string before = file_bytes(foreign);
+  for (const auto& args : store_commands(foreign)) {
+    CAPTURE(args[0]);
+    const Result r = pdamp_cli(args, dir);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("is not a pdamp run store: it is another program's SQLite database (tables notes)") !=
+          std::string::npos);
+  }
+  for (const auto& args : store_commands(empty)) {
+    if (args[0] == "run") continue;  // an empty file becomes a store when a run is stored in it
+    CAPTURE(args[0]);
+    const Result r = pdamp_cli(args, dir);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("is empty") != std::string::npos);
+  }
+  CHECK(file_bytes(foreign) == before);
+  CHECK_FALSE(std::filesystem::exists(dir / "foreign.sqlite-wal"));
+  CHECK_FALSE(std::filesystem::exists(dir / "foreign.sqlite-shm"));
+  CHECK(std::filesystem::file_size(empty) == 0);
+}
+
+TEST_CASE("a store its reader cannot write lists and shows runs") {
+  test::TempDir dir("cli-read-only");
+  const auto db = dir / "runs.sqlite";
+  store_host_run(dir, db);
+  const Result runs = pdamp_read_only({"runs", "--db", db.string()}, dir);
+  INFO(runs.err);
+  CHECK(runs.code == 0);
+  CHECK(runs.out.find("table1") != std::string::npos);
+  const Result show = pdamp_read_only({"show", "1", "--db", db.string()}, dir);
+  CHECK(show.code == 0);
+  CHECK(show.out.find("run 1: hard model") != std::string::npos);
+  const Result run = pdamp_read_only({"run", "--scenario", table1(), "--model", "hard", "--set", "particles.count=0",
+                                      "--duration", "0.01", "--db", db.string()},
+                                     dir);
+  CHECK(run.code == 2);
+  CHECK(run.err.find("readonly database") != std::string::npos);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs") == 1);
+}
+
+TEST_CASE("a damaged store is refused by every command, with a message and no SQL") {
+  test::TempDir dir("cli-damaged");
+  const auto db = dir / "runs.sqlite";
+  store_host_run(dir, db);
+  std::int64_t root = 0;
+  {
+    sqlite::Database d(db);
+    sqlite::Statement q(d, "SELECT rootpage FROM sqlite_schema WHERE name = 'samples'");
+    REQUIRE(q.step());
+    root = q.column_int(0);
+  }
+  {
+    std::fstream bytes(db, std::ios::in | std::ios::out | std::ios::binary);
+    bytes.seekp((root - 1) * 4096);
+    bytes.write("\x63\x63\x63\x63", 4);
+  }
+  const std::string before = file_bytes(db);
+  for (const auto& args : store_commands(db)) {
+    CAPTURE(args[0]);
+    const Result r = pdamp_cli(args, dir);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("is damaged") != std::string::npos);
+    CHECK(r.err.find(".recover") != std::string::npos);
+    CHECK(r.err.find("SELECT") == std::string::npos);
+  }
+  CHECK(file_bytes(db) == before);
+}
+
+TEST_CASE("progress on a terminal: percent and time left on one line") {
+  test::TempDir dir("cli-terminal");
+  const std::string text =
+      stderr_on_terminal({"run", "--scenario", table1(), "--model", "soft", "--set", "particles.count=0", "--set",
+                          "run.sample_interval_s=1e-5", "--duration", "200", "--db", (dir / "runs.sqlite").string()},
+                         dir, 4.0);
+  INFO(text);
+  CHECK(text.find("\r  soft model: t = ") != std::string::npos);
+  CHECK(text.find(" of 200.0000 s, ") != std::string::npos);
+  CHECK(text.find(" %, ") != std::string::npos);
+  CHECK(text.find(" left\x1b[K") != std::string::npos);
 }

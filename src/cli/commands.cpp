@@ -18,6 +18,8 @@
 #include "pdamp/sim/stored_run.hpp"
 #include "pdamp/soft/time_step.hpp"
 #include "pdamp/store/run_store.hpp"
+#include "progress.hpp"
+#include "text_table.hpp"
 
 namespace pdamp {
 namespace {
@@ -40,24 +42,22 @@ void install_stop_handlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
-void require_existing(const std::filesystem::path& db) {
-  if (!std::filesystem::exists(db)) {
-    throw InputError("database '" + db.string() + "' does not exist (give the file a run was stored in with --db)");
-  }
+std::string format_number(double value, int precision = 4) {
+  std::ostringstream out;
+  out << std::setprecision(precision) << value;
+  return out.str();
 }
 
 std::string format_optional(const std::optional<double>& value, int precision = 4) {
-  if (!value) return "-";
-  std::ostringstream out;
-  out << std::setprecision(precision) << *value;
-  return out.str();
+  return value ? format_number(*value, precision) : "-";
 }
 
 void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
   const auto s = store.summary(run_id);
   if (!s) throw InputError("run " + std::to_string(run_id) + " is not in '" + store.database().file().string() + "'");
-  out << "run " << s->run_id << ": " << s->model << " model, scenario '" << s->scenario_name << "', " << s->status;
-  if (!s->message.empty()) out << " (" << s->message << ")";
+  out << "run " << s->run_id << ": " << s->model << " model, scenario '" << printable(s->scenario_name) << "', "
+      << s->status;
+  if (!s->message.empty()) out << " (" << printable(s->message) << ")";
   out << "\n  particles               " << s->n_particles << "\n  simulated               " << s->sim_time_s << " s of "
       << s->duration_s << " s\n  wall time               " << format_optional(s->wall_time_s) << " s"
       << "\n  energy balance error    " << format_optional(s->energy_balance_rel_err, 3) << " (max relative)"
@@ -68,48 +68,72 @@ void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
   for (const auto& [name, value] : store.statistics(run_id)) {
     out << "  " << std::left << std::setw(28) << name << std::right << value << "\n";
   }
-  if (s->n_cycles == 0) return;
-  sqlite::Statement cycles(store.database(),
-                           "SELECT (SELECT freq_hz FROM cycles WHERE run_id = ?1 ORDER BY cycle LIMIT 1), "
-                           "(SELECT freq_hz FROM cycles WHERE run_id = ?1 ORDER BY cycle DESC LIMIT 1), "
-                           "psi, gamma, cycle FROM cycles WHERE run_id = ?1 ORDER BY psi DESC LIMIT 1");
-  cycles.bind(1, run_id);
-  if (cycles.step()) {
-    out << "  frequency               " << format_optional(cycles.column_double(0)) << " Hz (first cycle), "
-        << format_optional(cycles.column_double(1)) << " Hz (last)\n  psi peak                " << std::setprecision(4)
-        << cycles.column_double(2) << " in cycle " << cycles.column_int(4) << " (Gamma "
-        << format_optional(cycles.column_optional_double(3)) << ")\n";
+  if (const auto cycles = store.cycle_overview(run_id)) {
+    out << "  frequency               " << format_number(cycles->first_freq_hz) << " Hz (first cycle), "
+        << format_number(cycles->last_freq_hz) << " Hz (last)\n  psi peak                "
+        << format_number(cycles->psi_peak) << " in cycle " << cycles->psi_peak_cycle << " (Gamma "
+        << format_optional(cycles->psi_peak_gamma) << ")\n";
   }
 }
 
-InitialBed prepare_bed(const Scenario& scenario, RunStore& store, bool show_progress) {
-  std::function<void(double, double)> progress;
-  if (show_progress) {
-    progress = [](double t, double kinetic) {
-      std::fprintf(stderr, "\r  settling the bed: t = %.3f s, kinetic energy %.3g J   ", t, kinetic);
-      std::fflush(stderr);
+/// The bed of a command's runs: settled (or taken from the store) by the first run that
+/// needs it, the others start from the same.
+class CommandBed {
+ public:
+  CommandBed(const Scenario& scenario, RunStore& store, Progress& progress)
+      : scenario_(scenario), store_(store), progress_(progress) {}
+  BedSource source() {
+    return [this]() -> const InitialBed& {
+      if (!bed_) bed_ = prepare();
+      return *bed_;
     };
   }
-  InitialBed bed = prepare_initial_bed(scenario, store, &stop_requested, progress);
-  if (show_progress && !bed.reused && scenario.particles.count > 0) std::fputs("\n", stderr);
-  if (bed.state_id) {
-    std::cerr << "pdamp: " << (bed.reused ? "starting from stored" : "settled and stored") << " bed " << *bed.state_id
-              << " (" << scenario.particles.count << " spheres at rest after " << bed.settle_time_s
-              << " s of settling)\n";
-  }
-  return bed;
-}
 
-RunControl run_control(const Scenario& scenario, bool show_progress) {
+ private:
+  InitialBed prepare() {
+    progress_.begin("settling the bed");
+    InitialBed bed = prepare_initial_bed(scenario_, store_, &stop_requested, [this](double t, double kinetic) {
+      progress_.update(t, "kinetic energy " + format_number(kinetic, 3) + " J");
+    });
+    progress_.end();
+    if (bed.state_id) {
+      std::ostringstream note;
+      note << "pdamp: " << (bed.reused ? "starting from stored" : "settled and stored") << " bed " << *bed.state_id
+           << " (" << scenario_.particles.count << " spheres at rest after " << bed.settle_time_s << " s of settling)";
+      progress_.message(note.str());
+    }
+    return bed;
+  }
+
+  const Scenario& scenario_;
+  RunStore& store_;
+  Progress& progress_;
+  std::optional<InitialBed> bed_;
+};
+
+/// Stops on SIGINT and SIGTERM; reports progress as the phase `label` of the scenario's duration.
+RunControl run_control(const Scenario& scenario, Progress& progress, const std::string& label) {
   RunControl control;
   control.stop = &stop_requested;
-  if (show_progress) {
-    control.progress = [duration = scenario.run.duration_s](double t) {
-      std::fprintf(stderr, "\r  t = %.4f of %.4f s", t, duration);
-      std::fflush(stderr);
-    };
-  }
+  control.progress = [&progress, label, duration = scenario.run.duration_s, begun = false](double t) mutable {
+    if (!begun) progress.begin(label, duration);
+    begun = true;
+    progress.update(t);
+  };
   return control;
+}
+
+std::function<void(const std::string&)> warnings_to(Progress& progress) {
+  return [&progress](const std::string& warning) { progress.message("pdamp: warning: " + warning); };
+}
+
+std::int64_t parse_run_id(const std::string& text) {
+  std::int64_t run_id = 0;
+  const char* end = text.data() + text.size();
+  if (auto [ptr, ec] = std::from_chars(text.data(), end, run_id); ec != std::errc() || ptr != end || run_id < 1) {
+    throw InputError("RUN_ID '" + printable(text) + "' must be a positive whole number (see 'pdamp runs')");
+  }
+  return run_id;
 }
 
 int exit_code(const StoredRun& run) {
@@ -128,19 +152,20 @@ int exit_code(const StoredRun& run) {
 }  // namespace
 
 int run_command(const ScenarioRequest& request, const std::string& model_name, const std::filesystem::path& db,
-                bool show_progress) {
+                bool terminal) {
   // Everything that can be wrong with the input is found before the store is touched.
   const Model model = parse_model(model_name);
   const Scenario scenario = load_scenario(request.file, request.overrides);
-  check_model_can_run(model, scenario);
+  const RunPlan plan = plan_run(model, scenario);
 
   RunStore store(db);
   install_stop_handlers();
-  const InitialBed bed = prepare_bed(scenario, store, show_progress);
+  Progress progress(std::cerr, terminal);
+  CommandBed bed(scenario, store, progress);
   const StoredRun run =
-      run_and_store(store, model, scenario, bed, run_control(scenario, show_progress),
-                    [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; });
-  if (show_progress) std::fputs("\n", stderr);
+      run_and_store(store, plan, bed.source(),
+                    run_control(scenario, progress, std::string(to_string(model)) + " model"), warnings_to(progress));
+  progress.end();
   print_summary(store, run.run_id, std::cout);
   return exit_code(run);
 }
@@ -151,19 +176,17 @@ std::string cell(const std::optional<double>& value, int precision = 4) { return
 
 void print_comparison(RunStore& store, std::int64_t id, const ComparisonRecord& c, std::ostream& out) {
   auto psi_peak = [&](std::int64_t run) {
-    sqlite::Statement q(store.database(), "SELECT psi, gamma FROM cycles WHERE run_id = ? ORDER BY psi DESC LIMIT 1");
-    q.bind(1, run);
-    return q.step() ? format_optional(q.column_double(0), 3) + " (Gamma " +
-                          format_optional(q.column_optional_double(1), 3) + ")"
-                    : std::string("-");
+    const auto cycles = store.cycle_overview(run);
+    return cycles ? format_number(cycles->psi_peak, 3) + " (Gamma " + format_optional(cycles->psi_peak_gamma, 3) + ")"
+                  : std::string("-");
   };
   auto row = [&](const std::string& name, const std::string& soft, const std::string& hard,
                  const std::string& note = "") {
     out << "  " << std::left << std::setw(32) << name << std::setw(20) << soft << std::setw(20) << hard << note << "\n";
   };
   const auto energy_end = c.energy.end() - 2;  // the last time: soft then hard
-  out << "comparison " << id << ": scenario '" << c.scenario_name << "', soft run " << c.soft_run_id << ", hard run "
-      << c.hard_run_id << ", hard restitution " << c.hard_restitution << "\n";
+  out << "comparison " << id << ": scenario '" << printable(c.scenario_name) << "', soft run " << c.soft_run_id
+      << ", hard run " << c.hard_run_id << ", hard restitution " << c.hard_restitution << "\n";
   row("", "soft", "hard");
   row("wall time (s)", cell(c.wall_time_soft_s), cell(c.wall_time_hard_s), "soft/hard " + cell(c.wall_time_ratio, 3));
   row("time steps / collisions", std::to_string(c.soft_steps), std::to_string(c.hard_events));
@@ -183,22 +206,22 @@ void print_comparison(RunStore& store, std::int64_t id, const ComparisonRecord& 
 
 }  // namespace
 
-int compare_command(const ScenarioRequest& request, const std::filesystem::path& db, bool show_progress) {
+int compare_command(const ScenarioRequest& request, const std::filesystem::path& db, bool terminal) {
   const Scenario scenario = load_scenario(request.file, request.overrides);
-  check_model_can_run(Model::soft, scenario);
-  check_model_can_run(Model::hard, scenario);
+  const RunPlan plans[2] = {plan_run(Model::soft, scenario), plan_run(Model::hard, scenario)};
 
   RunStore store(db);
   install_stop_handlers();
-  const InitialBed bed = prepare_bed(scenario, store, show_progress);
-  auto warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
-  const RunControl control = run_control(scenario, show_progress);
+  Progress progress(std::cerr, terminal);
+  CommandBed bed(scenario, store, progress);
   std::int64_t run_ids[2] = {0, 0};
-  for (const Model model : {Model::soft, Model::hard}) {
-    if (show_progress) std::cerr << "pdamp: " << to_string(model) << " model\n";
-    const StoredRun run = run_and_store(store, model, scenario, bed, control, warn);
-    if (show_progress) std::fputs("\n", stderr);
-    run_ids[model == Model::hard] = run.run_id;
+  for (const RunPlan& plan : plans) {
+    const std::string label = std::string(to_string(plan.model)) + " model";
+    progress.message("pdamp: " + label);
+    const StoredRun run =
+        run_and_store(store, plan, bed.source(), run_control(scenario, progress, label), warnings_to(progress));
+    progress.end();
+    run_ids[plan.model == Model::hard] = run.run_id;
     if (run.outcome.status != RunStatus::completed) {
       print_summary(store, run.run_id, std::cout);
       return exit_code(run);
@@ -206,7 +229,7 @@ int compare_command(const ScenarioRequest& request, const std::filesystem::path&
   }
   ComparisonRecord comparison = compare_stored_runs(store, run_ids[0], run_ids[1]);
   comparison.scenario_name = scenario.name;
-  comparison.initial_state_id = bed.state_id;
+  comparison.initial_state_id = bed.source()().state_id;
   comparison.hard_restitution = scenario.hard_restitution == HardRestitution::calibrated ? "calibrated" : "constant";
   const std::int64_t id = store.save_comparison(comparison);
   print_comparison(store, id, comparison, std::cout);
@@ -226,31 +249,42 @@ void set_thread_count(const std::string& text) {
 }
 
 int list_runs_command(const std::filesystem::path& db) {
-  require_existing(db);
-  RunStore store(db);
-  std::cout << std::left << std::setw(7) << "run_id" << std::setw(6) << "model" << std::setw(24) << "scenario"
-            << std::setw(12) << "status" << std::right << std::setw(10) << "particles" << std::setw(11) << "sim_s"
-            << std::setw(11) << "wall_s" << std::setw(11) << "balance" << std::setw(8) << "cycles"
-            << "\n";
+  RunStore store(db, StoreAccess::read);
+  TextTable table({{"run_id", true},
+                   {"model"},
+                   {"scenario", false, 40},
+                   {"status"},
+                   {"particles", true},
+                   {"sim_s", true},
+                   {"wall_s", true},
+                   {"balance", true},
+                   {"cycles", true}});
   for (const auto& s : store.list_runs()) {
-    std::cout << std::left << std::setw(7) << s.run_id << std::setw(6) << s.model << std::setw(24) << s.scenario_name
-              << std::setw(12) << s.status << std::right << std::setw(10) << s.n_particles << std::setw(11)
-              << std::setprecision(4) << s.sim_time_s << std::setw(11) << format_optional(s.wall_time_s)
-              << std::setw(11) << format_optional(s.energy_balance_rel_err, 2) << std::setw(8) << s.n_cycles << "\n";
+    table.add_row({std::to_string(s.run_id), s.model, s.scenario_name, s.status, std::to_string(s.n_particles),
+                   format_number(s.sim_time_s), format_optional(s.wall_time_s),
+                   format_optional(s.energy_balance_rel_err, 2), std::to_string(s.n_cycles)});
   }
+  table.print(std::cout);
   return 0;
 }
 
 int show_run_command(const std::string& run_id_text, const std::filesystem::path& db) {
-  std::int64_t run_id = 0;
-  const char* end = run_id_text.data() + run_id_text.size();
-  if (auto [ptr, ec] = std::from_chars(run_id_text.data(), end, run_id);
-      ec != std::errc() || ptr != end || run_id < 1) {
-    throw InputError("RUN_ID '" + run_id_text + "' must be a positive whole number (see 'pdamp runs')");
-  }
-  require_existing(db);
-  RunStore store(db);
+  const std::int64_t run_id = parse_run_id(run_id_text);
+  RunStore store(db, StoreAccess::read);
   print_summary(store, run_id, std::cout);
+  return 0;
+}
+
+int delete_runs_command(const std::vector<std::string>& run_id_texts, const std::filesystem::path& db, bool force) {
+  std::vector<std::int64_t> run_ids;
+  for (const auto& text : run_id_texts) run_ids.push_back(parse_run_id(text));
+  RunStore store(db, StoreAccess::modify);
+  for (const DeletedRun& d : store.delete_runs(run_ids, force)) {
+    std::cout << "deleted run " << d.run.run_id << ": " << d.run.model << " model, scenario '"
+              << printable(d.run.scenario_name) << "', " << d.run.status << " (" << d.run.n_samples << " samples, "
+              << d.run.n_cycles << " cycles, " << d.comparisons << (d.comparisons == 1 ? " comparison" : " comparisons")
+              << ")\n";
+  }
   return 0;
 }
 

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "pdamp/scenario/scenario_loader.hpp"
 
@@ -13,12 +14,15 @@ struct ScenarioRequest {
   ScenarioOverrides overrides;
 };
 
+/// `terminal`: whether stderr is one (progress redrawn in place) or a log (a line now and then).
 int run_command(const ScenarioRequest& request, const std::string& model, const std::filesystem::path& db,
-                bool show_progress);
+                bool terminal);
 int list_runs_command(const std::filesystem::path& db);
 int show_run_command(const std::string& run_id, const std::filesystem::path& db);
+/// `force`: also runs still marked running.
+int delete_runs_command(const std::vector<std::string>& run_ids, const std::filesystem::path& db, bool force);
 int check_command(const ScenarioRequest& request);
-int compare_command(const ScenarioRequest& request, const std::filesystem::path& db, bool show_progress);
+int compare_command(const ScenarioRequest& request, const std::filesystem::path& db, bool terminal);
 /// Sets the number of threads (--threads); throws InputError unless it is 1 to 1024.
 void set_thread_count(const std::string& text);
 

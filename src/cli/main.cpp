@@ -1,6 +1,7 @@
 /// pdamp command line: run a scenario on either engine, list and show stored runs.
-/// Exit codes: 0 success, 1 runtime failure, 2 usage or input error, 128 + signal when
-/// a run was interrupted (its results are kept and marked interrupted).
+/// Exit codes: 0 success; 1 runtime failure (the run is stored as failed, unless the store
+/// itself failed); 2 usage or input error (nothing is stored); 128 + signal when a run was
+/// interrupted (stored as interrupted with what it computed).
 
 #include <unistd.h>
 
@@ -28,6 +29,8 @@ constexpr const char* usage =
     "          simulate a scenario and store the run\n"
     "  runs    [--db FILE]            list the stored runs\n"
     "  show    RUN_ID [--db FILE]     summary of one run\n"
+    "  delete  RUN_ID... [--db FILE] [--force]\n"
+    "          delete runs with their samples, cycles, statistics and comparisons\n"
     "  compare --scenario FILE [--set k=v ...] [--db FILE] [--duration S]\n"
     "          settle one bed, run both models from it, store both and their comparison\n"
     "  check   --scenario FILE [--set k=v ...]\n"
@@ -141,6 +144,22 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
       return 0;
     }
     return show_run_command(required(vm, "run-id", command), vm["db"].as<std::string>());
+  }
+  if (command == "delete") {
+    po::options_description options("pdamp delete RUN_ID... [--db FILE] [--force]");
+    options.add(help).add(db_option());
+    options.add_options()("run-id", po::value<std::vector<std::string>>(), "runs to delete")(
+        "force", "also delete runs marked running (killed runs stay so; a run still going then fails)");
+    po::positional_options_description positional;
+    positional.add("run-id", -1);
+    const auto vm = parse(args, options, positional);
+    if (vm.count("help")) {
+      std::cout << options << "\n";
+      return 0;
+    }
+    if (!vm.count("run-id")) throw InputError("pdamp delete: give the RUN_IDs to delete (see 'pdamp runs')");
+    return delete_runs_command(vm["run-id"].as<std::vector<std::string>>(), vm["db"].as<std::string>(),
+                               vm.count("force") > 0);
   }
   if (command == "check") {
     po::options_description options("pdamp check --scenario FILE [--set k=v ...]");

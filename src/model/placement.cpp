@@ -83,16 +83,20 @@ double solid_fraction(const CavitySettings& cavity, const Particles& particles) 
   return spheres_m3 / (std::numbers::pi * cavity.radius_m() * cavity.radius_m() * cavity.height_m);
 }
 
-Particles place_particles(const ParticleSettings& settings, const CavitySettings& cavity, double host_z_m) {
-  const int n = settings.count;
+void check_particles_fit(const ParticleSettings& settings, const CavitySettings& cavity) {
   const double d_max = settings.diameter_max_m;
-  const int capacity = max_particles_that_fit(cavity, d_max);
-  if (n > capacity) {
+  if (const int capacity = max_particles_that_fit(cavity, d_max); settings.count > capacity) {
     std::ostringstream msg;
-    msg << "particles.count = " << n << ": at most " << capacity << " spheres of diameter " << d_max
+    msg << "particles.count = " << settings.count << ": at most " << capacity << " spheres of diameter " << d_max
         << " m can be placed in the cavity";
     throw InputError(msg.str());
   }
+}
+
+Particles place_particles(const ParticleSettings& settings, const CavitySettings& cavity, double host_z_m) {
+  check_particles_fit(settings, cavity);
+  const int n = settings.count;
+  const double d_max = settings.diameter_max_m;
   Particles particles(n);
   if (n == 0) return particles;
 

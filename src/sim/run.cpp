@@ -81,7 +81,12 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
     outcome.status = RunStatus::failed;
     outcome.message = e.what();
   }
-  recorder.flush();
+  try {
+    recorder.flush();
+  } catch (const std::exception& e) {
+    outcome.status = RunStatus::failed;
+    outcome.message += (outcome.message.empty() ? "" : "; ") + std::string("results not all stored: ") + e.what();
+  }
   outcome.wall_time_s = std::chrono::duration<double>(clock::now() - wall_start).count();
   return outcome;
 }

@@ -3,40 +3,84 @@
 #include <omp.h>
 #include <sys/resource.h>
 
-#include <optional>
+#include <chrono>
+#include <memory>
 
+#include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/calibration.hpp"
 
 namespace pdamp {
+namespace {
 
-StoredRun run_and_store(RunStore& store, Model model, const Scenario& scenario, const InitialBed& bed,
-                        const RunControl& control, const std::function<void(const std::string&)>& warn) {
-  std::optional<RestitutionTable> calibration;
-  if (model == Model::hard && scenario.hard_restitution == HardRestitution::calibrated && bed.particles.size() > 0) {
-    calibration = calibrate_restitution(scenario);
-  }
-  auto engine = make_engine(model, scenario, bed.particles, calibration ? &*calibration : nullptr);
-  StoredRun result;
-  result.run_id = store.begin_run({std::string(to_string(model)), scenario.name, scenario.canonical_text,
-                                   scenario.particles.seed, scenario.particles.count, scenario.run.duration_s,
-                                   engine->time_step_s() > 0 ? std::optional(engine->time_step_s()) : std::nullopt,
-                                   bed.state_id, solid_fraction(scenario.cavity, bed.particles)});
-  if (calibration) store.save_calibration(result.run_id, *calibration);
-  {
-    RunWriter writer(store, result.run_id);
-    result.outcome = run_simulation(*engine, scenario, writer, control);
-  }
-  for (const auto& warning : engine->warnings()) {
-    if (warn) warn(warning);
-    result.outcome.message += (result.outcome.message.empty() ? "warning: " : "; warning: ") + warning;
-  }
-  EngineStatistics statistics = engine->statistics();
+/// Builds the run's engine from its bed and records what it started from; an exception
+/// leaves the run to be stored as failed (or interrupted).
+std::unique_ptr<Engine> start_engine(RunStore& store, std::int64_t run_id, const RunPlan& plan,
+                                     const BedSource& bed_source) {
+  const Scenario& scenario = *plan.scenario;
+  const InitialBed& bed = bed_source();
+  auto engine = make_engine(plan.model, scenario, bed.particles, plan.calibration ? &*plan.calibration : nullptr);
+  store.start_run(run_id, {engine->time_step_s() > 0 ? std::optional(engine->time_step_s()) : std::nullopt,
+                           bed.state_id, solid_fraction(scenario.cavity, bed.particles)});
+  if (plan.calibration && bed.particles.size() > 0) store.save_calibration(run_id, *plan.calibration);
+  return engine;
+}
+
+void store_engine_statistics(RunStore& store, std::int64_t run_id, const Engine& engine) {
+  EngineStatistics statistics = engine.statistics();
   statistics.emplace_back("threads", omp_get_max_threads());
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   statistics.emplace_back("peak_memory_kB", usage.ru_maxrss);
-  store.save_statistics(result.run_id, statistics);
+  store.save_statistics(run_id, statistics);
+}
+
+}  // namespace
+
+RunPlan plan_run(Model model, const Scenario& scenario) {
+  check_model_can_run(model, scenario);
+  RunPlan plan{model, &scenario, std::nullopt};
+  if (model == Model::hard && scenario.hard_restitution == HardRestitution::calibrated &&
+      scenario.particles.count > 0) {
+    try {
+      plan.calibration = calibrate_restitution(scenario);
+    } catch (const RuntimeFailure& e) {
+      throw InputError(std::string("hard.restitution = calibrated: ") + e.what());
+    }
+  }
+  return plan;
+}
+
+StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& bed, const RunControl& control,
+                        const std::function<void(const std::string&)>& warn) {
+  const Scenario& scenario = *plan.scenario;
+  const auto wall_start = std::chrono::steady_clock::now();
+  StoredRun result;
+  result.run_id = store.begin_run({std::string(to_string(plan.model)), scenario.name, scenario.canonical_text,
+                                   scenario.particles.seed, scenario.particles.count, scenario.run.duration_s});
+  std::unique_ptr<Engine> engine;
+  try {
+    engine = start_engine(store, result.run_id, plan, bed);
+  } catch (const Interrupted& e) {
+    result.outcome.status = RunStatus::interrupted;
+    result.outcome.message = e.what();
+  } catch (const std::exception& e) {
+    result.outcome.status = RunStatus::failed;
+    result.outcome.message = e.what();
+  }
+  if (engine) {
+    {
+      RunWriter writer(store, result.run_id);
+      result.outcome = run_simulation(*engine, scenario, writer, control);
+    }
+    for (const auto& warning : engine->warnings()) {
+      if (warn) warn(warning);
+      result.outcome.message += (result.outcome.message.empty() ? "warning: " : "; warning: ") + warning;
+    }
+    store_engine_statistics(store, result.run_id, *engine);
+  } else {
+    result.outcome.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  }
   store.finish_run(result.run_id, result.outcome);
   return result;
 }

@@ -216,8 +216,55 @@ FROM runs r JOIN samples s ON s.run_id = r.run_id
  AND s.t_s = (SELECT max(t_s) FROM samples m WHERE m.run_id = r.run_id);
 )sql";
 
-constexpr std::array<std::string_view, 5> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
-                                              v4_comparisons, v5_solid_fraction};
+/// A run_id is never used twice, also after the newest run is deleted (AUTOINCREMENT:
+/// the table is rebuilt, with foreign keys off, RunStore::migrate). The first id after
+/// the migration comes after every id that any row still refers to: a run deleted by
+/// hand with foreign keys off leaves its samples behind. The file is marked as a pdamp
+/// store (application_id 'pdam'). The views that read runs resolve to the new table by
+/// name (legacy_alter_table: the rename leaves them as they are).
+constexpr std::string_view v6_run_ids_never_reused = R"sql(
+PRAGMA application_id = 1885626733;
+PRAGMA legacy_alter_table = ON;
+
+CREATE TABLE runs_v6 (
+  run_id                  INTEGER PRIMARY KEY AUTOINCREMENT,
+  model                   TEXT NOT NULL CHECK (model IN ('soft', 'hard')),
+  scenario_name           TEXT NOT NULL,
+  scenario_text           TEXT NOT NULL,            -- every key with its resolved value
+  seed                    INTEGER NOT NULL,         -- uint64 stored as its int64 bit pattern
+  n_particles             INTEGER NOT NULL CHECK (n_particles >= 0),
+  duration_s              REAL NOT NULL,            -- requested simulated time
+  dt_s                    REAL,                     -- time step (time-stepped engines)
+  pdamp_version           TEXT NOT NULL,
+  status                  TEXT NOT NULL CHECK (status IN ('running', 'completed', 'failed', 'interrupted')),
+  message                 TEXT NOT NULL DEFAULT '',
+  started_at              TEXT NOT NULL,            -- ISO 8601, UTC
+  ended_at                TEXT,
+  wall_time_s             REAL,
+  sim_time_s              REAL NOT NULL DEFAULT 0,  -- simulated time reached
+  initial_energy_J        REAL,
+  energy_balance_rel_err  REAL,                     -- max over the run of |E0 + W - E - D| / (|E0| + |W|)
+  initial_state_id        INTEGER REFERENCES initial_states (state_id),
+  solid_fraction          REAL CHECK (solid_fraction >= 0)  -- the spheres' volume over the hole's
+) STRICT;
+INSERT INTO runs_v6 SELECT run_id, model, scenario_name, scenario_text, seed, n_particles, duration_s, dt_s,
+  pdamp_version, status, message, started_at, ended_at, wall_time_s, sim_time_s, initial_energy_J,
+  energy_balance_rel_err, initial_state_id, solid_fraction FROM runs;
+DROP TABLE runs;
+ALTER TABLE runs_v6 RENAME TO runs;
+PRAGMA legacy_alter_table = OFF;
+
+DELETE FROM sqlite_sequence WHERE name IN ('runs', 'runs_v6');
+INSERT INTO sqlite_sequence (name, seq)
+SELECT 'runs', coalesce(max(id), 0) FROM (
+  SELECT max(run_id) AS id FROM runs UNION ALL SELECT max(run_id) FROM samples
+  UNION ALL SELECT max(run_id) FROM cycles UNION ALL SELECT max(run_id) FROM run_statistics
+  UNION ALL SELECT max(run_id) FROM calibrations UNION ALL SELECT max(soft_run_id) FROM comparisons
+  UNION ALL SELECT max(hard_run_id) FROM comparisons);
+)sql";
+
+constexpr std::array<std::string_view, 6> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
+                                              v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused};
 
 }  // namespace
 

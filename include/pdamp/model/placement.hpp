@@ -19,6 +19,9 @@ int max_particles_that_fit(const CavitySettings& cavity, double diameter_m);
 /// The spheres' volume over the cavity's (the fill of a damper).
 double solid_fraction(const CavitySettings& cavity, const Particles& particles);
 
+/// Throws InputError if `settings.count` spheres do not fit (max_particles_that_fit).
+void check_particles_fit(const ParticleSettings& settings, const CavitySettings& cavity);
+
 /// Places `settings.count` spheres with the cavity bottom at z = host_z_m, at rest.
 /// Diameters are uniform in [diameter_min_m, diameter_max_m]. Throws InputError if
 /// they do not fit.

@@ -2,11 +2,17 @@
 /// One run of one model from a bed, stored as it goes: the run's row, its samples and
 /// cycles, the calibration the hard model used, the engine's statistics, and how it ended.
 /// `pdamp run` makes one; `pdamp compare` makes one per model from the same bed.
+///
+/// What can be found from the scenario alone is checked before the store is touched
+/// (plan_run). The run's row is written next, before the bed is settled, so that whatever
+/// ends the run later (a failure, a signal) is stored with it.
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 
+#include "pdamp/model/restitution.hpp"
 #include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
@@ -14,13 +20,31 @@
 
 namespace pdamp {
 
+/// A model checked to run a scenario, with what it needs that depends on the scenario alone.
+struct RunPlan {
+  Model model;
+  const Scenario* scenario;
+  std::optional<RestitutionTable> calibration;  ///< the hard model's, when calibrated
+};
+
+/// Checks that `model` can run `scenario` (check_model_can_run) and calibrates the hard
+/// model's restitution if the scenario asks for it. Throws InputError for either failing.
+RunPlan plan_run(Model model, const Scenario& scenario);
+
+/// Gives the bed a run starts from, settling it or taking it from the store (the bed is
+/// shared by the runs of a comparison). May throw, Interrupted included.
+using BedSource = std::function<const InitialBed&()>;
+
 struct StoredRun {
   std::int64_t run_id = 0;
   RunOutcome outcome;
 };
 
+/// Stores the run's row, gets its bed, runs it and stores how it ended: failed with the
+/// message if the bed, the engine or the run failed, interrupted if a signal stopped it.
 /// `warn` receives the engine's warnings (they are also appended to the run's message).
-StoredRun run_and_store(RunStore& store, Model model, const Scenario& scenario, const InitialBed& bed,
-                        const RunControl& control, const std::function<void(const std::string&)>& warn = {});
+/// Throws only if the store itself fails.
+StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& bed, const RunControl& control,
+                        const std::function<void(const std::string&)>& warn = {});
 
 }  // namespace pdamp

@@ -6,7 +6,9 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,7 @@ namespace pdamp {
 enum class RunStatus { running, completed, failed, interrupted };
 std::string_view to_string(RunStatus status);
 
+/// A run as it begins, before its bed is settled or its engine built.
 struct NewRun {
   std::string model;  ///< "soft" or "hard"
   std::string scenario_name;
@@ -28,9 +31,19 @@ struct NewRun {
   std::uint64_t seed = 0;
   int n_particles = 0;
   double duration_s = 0.0;
+};
+
+/// What a run started from, once its bed and engine are ready.
+struct RunStart {
   std::optional<double> dt_s;                    ///< time step of a time-stepped engine
   std::optional<std::int64_t> initial_state_id;  ///< the settled bed the run started from
   double solid_fraction = 0.0;                   ///< the spheres' volume over the hole's
+};
+
+/// One sample of a run as the store keeps it.
+struct SampleRecord {
+  Observation observation;
+  double energy_balance_rel_err = 0.0;
 };
 
 /// A settled bed kept for other runs (and the other engine) to start from.
@@ -58,6 +71,20 @@ struct RunSummary {
   std::optional<double> wall_time_s, energy_balance_rel_err;
   std::int64_t n_samples = 0, n_cycles = 0;
   std::optional<double> dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J;
+};
+
+/// A run's cycles at a glance: the first and last frequency and the ψ peak.
+struct CycleOverview {
+  double first_freq_hz = 0.0, last_freq_hz = 0.0;
+  double psi_peak = 0.0;
+  std::optional<double> psi_peak_gamma;
+  std::int64_t psi_peak_cycle = 0;
+};
+
+/// A run `pdamp delete` removed: its summary and how many comparisons went with it.
+struct DeletedRun {
+  RunSummary run;
+  std::int64_t comparisons = 0;
 };
 
 /// One row of `comparisons` with its ψ bins and energies at fixed times.
@@ -90,15 +117,38 @@ struct ComparisonRecord {
   std::vector<Energy> energy;
 };
 
+/// `read` (the reading commands): the file must be a pdamp store, and is not written
+/// (only migrated if its schema is older). `modify`: the file must be a pdamp store.
+/// `write`: the file may also be missing or empty, and becomes a store.
+enum class StoreAccess { read, modify, write };
+
+struct StoreOptions {
+  /// How long a read or write waits for other connections' locks before failing.
+  std::chrono::milliseconds busy_limit = sqlite::default_busy_limit;
+  /// Stores up to this size are checked whole on open (PRAGMA quick_check reads every
+  /// page: ~0.2 s of CPU for 64 MiB, 2.3 s for 1 GB); larger ones have their run tables
+  /// checked, not the samples, cycles and beds, whose damage is reported where read.
+  std::uintmax_t full_check_limit_bytes = std::uintmax_t{64} << 20;
+};
+
+/// One connection to a store: one per thread (studies run many points in parallel, from
+/// threads and processes, into one file). Every write is a short transaction, retried
+/// while others hold the lock (StoreOptions::busy_limit).
 class RunStore {
  public:
-  /// Opens or creates the store and migrates it to the current schema. Throws
-  /// InputError for a file that is not a pdamp store or was written by a newer pdamp.
-  explicit RunStore(const std::filesystem::path& file);
+  /// Opens or creates the store and migrates it to the current schema. The file is
+  /// examined before anything is written to it. Throws InputError for a file that is not
+  /// a pdamp store, is damaged or was written by a newer pdamp.
+  explicit RunStore(const std::filesystem::path& file, StoreAccess access = StoreAccess::write,
+                    const StoreOptions& options = {});
 
   static int schema_version();
 
+  /// The run's row, `running`, created before any work so that whatever ends it is stored.
   std::int64_t begin_run(const NewRun& run);
+  void start_run(std::int64_t run_id, const RunStart& start);
+  /// Appends samples and cycles of a run in one transaction.
+  void append_results(std::int64_t run_id, std::span<const SampleRecord> samples, std::span<const CycleRecord> cycles);
   void finish_run(std::int64_t run_id, const RunEnd& end);
   /// The restitution table a hard run used.
   void save_calibration(std::int64_t run_id, const RestitutionTable& table);
@@ -117,17 +167,26 @@ class RunStore {
 
   std::vector<RunSummary> list_runs();
   std::optional<RunSummary> summary(std::int64_t run_id);
+  /// Empty for a run without cycles.
+  std::optional<CycleOverview> cycle_overview(std::int64_t run_id);
 
-  sqlite::Database& database() { return db_; }
+  /// Deletes runs and every row that refers to them (samples, cycles, statistics,
+  /// calibrations, comparisons), all or none: throws InputError, deleting nothing, for an
+  /// id not in the store, or for a `running` run unless `including_running`. Returns the
+  /// deleted runs. Settled beds stay (other runs may start from them).
+  std::vector<DeletedRun> delete_runs(std::span<const std::int64_t> run_ids, bool including_running);
+
+  sqlite::Database& database() { return *db_; }
 
  private:
   void migrate();
-  sqlite::Database db_;
+  std::unique_ptr<sqlite::Database> db_;
 };
 
-/// Streams one run's samples and cycles into the store in batched transactions,
-/// committed at least every `commit_interval` of wall time, so a killed run keeps all
-/// but the last moments.
+/// Keeps one run's samples and cycles in memory and writes them in short transactions,
+/// each at least `commit_interval` of wall time after the last (or when many rows wait),
+/// so that no lock is held while the engine computes and a killed run keeps all but its
+/// last moments.
 class RunWriter final : public RunRecorder {
  public:
   RunWriter(RunStore& store, std::int64_t run_id,
@@ -139,16 +198,14 @@ class RunWriter final : public RunRecorder {
   void flush() override;
 
  private:
-  void begin_batch();
-  void commit_if_due();
+  void flush_if_due();
 
   RunStore* store_;
   std::int64_t run_id_;
   std::chrono::milliseconds commit_interval_;
-  std::chrono::steady_clock::time_point batch_started_;
-  bool in_batch_ = false;
-  sqlite::Statement insert_sample_;
-  sqlite::Statement insert_cycle_;
+  std::chrono::steady_clock::time_point last_flush_;
+  std::vector<SampleRecord> samples_;
+  std::vector<CycleRecord> cycles_;
 };
 
 }  // namespace pdamp

@@ -1,0 +1,106 @@
+/// What the CLI prints besides results: stored text made safe, fitted tables, progress.
+#include <doctest/doctest.h>
+
+#include <sstream>
+
+#include "../src/cli/progress.hpp"
+#include "../src/cli/text_table.hpp"
+
+using namespace pdamp;
+
+TEST_CASE("printable: control characters and bytes that are not UTF-8 become escapes") {
+  CHECK(printable("table1") == "table1");
+  CHECK(printable("a\nb\tc\rd") == "a\\nb\\tc\\rd");
+  CHECK(printable("\x1b[31mred\x07") == "\\x1b[31mred\\x07");
+  CHECK(printable(std::string("nul\0byte", 8)) == "nul\\x00byte");
+  CHECK(printable("del\x7f") == "del\\x7f");
+  CHECK(printable("Kühlung ∆ 振動") == "Kühlung ∆ 振動");  // UTF-8 stays
+  CHECK(printable("\xc2\x9b"
+                  "2J") == "\\xc2\\x9b2J");                                // C1 control (CSI)
+  CHECK(printable("\xff\xc3") == "\\xff\\xc3");                            // not UTF-8
+  CHECK(printable("\xc0\xaf") == "\\xc0\\xaf");                            // overlong
+  CHECK(printable("'; DROP TABLE runs; --") == "'; DROP TABLE runs; --");  // quotes are printable
+  CHECK(display_width("Kühlung ∆") == 9);
+}
+
+TEST_CASE("a text table fits its columns to what they hold, and cuts what is too long") {
+  TextTable table({{"id", true}, {"name", false, 12}, {"status"}});
+  table.add_row({"7", "short", "completed"});
+  table.add_row({"1234", "a name much longer than twelve", "failed"});
+  table.add_row({"8", "tab\there", "running"});
+  table.add_row({"9", "Kühlung", "running"});
+  std::ostringstream out;
+  table.print(out);
+  CHECK(out.str() ==
+        "  id  name          status\n"
+        "   7  short         completed\n"
+        "1234  a name much…  failed\n"
+        "   8  tab\\there     running\n"
+        "   9  Kühlung       running\n");
+}
+
+namespace {
+
+/// A clock the test moves by hand.
+struct FakeClock {
+  std::chrono::steady_clock::time_point now{};
+  Progress::Clock clock() {
+    return [this] { return now; };
+  }
+  void advance(double seconds) {
+    now += std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
+  }
+};
+
+}  // namespace
+
+TEST_CASE("progress on a terminal: one line redrawn with percent and time left; messages on lines of their own") {
+  FakeClock time;
+  std::ostringstream out;
+  Progress progress(out, true, time.clock());
+  progress.begin("soft model", 1.5);
+  progress.update(0.0);
+  time.advance(1.0);
+  progress.update(0.1);
+  CHECK(out.str() == "\r  soft model: t = 0.1000 of 1.5000 s, 6.7 %\033[K");
+  time.advance(0.1);  // sooner than a redraw
+  progress.update(0.11);
+  time.advance(2.9);  // 4 s after the first update, 0.4 of 1.5 s done: 11 s left
+  out.str("");
+  progress.update(0.4);
+  CHECK(out.str() == "\r  soft model: t = 0.4000 of 1.5000 s, 26.7 %, 11 s left\033[K");
+  out.str("");
+  progress.message("pdamp: warning: contacts overlapped");
+  CHECK(out.str() ==
+        "\r\033[Kpdamp: warning: contacts overlapped\n  soft model: t = 0.4000 of 1.5000 s, 26.7 %, 11 s left");
+  out.str("");
+  progress.end();
+  CHECK(out.str() == "\n");
+  out.str("");
+  progress.message("pdamp: settled");
+  CHECK(out.str() == "pdamp: settled\n");
+}
+
+TEST_CASE("progress in a log: a line every 30 s, each complete") {
+  FakeClock time;
+  std::ostringstream out;
+  Progress progress(out, false, time.clock());
+  progress.begin("settling the bed");
+  for (int second = 0; second <= 65; ++second) {
+    progress.update(0.01 * second, "kinetic energy 1e-05 J");
+    time.advance(1.0);
+  }
+  CHECK(out.str() ==
+        "pdamp: settling the bed: t = 0.3000 s, kinetic energy 1e-05 J\n"
+        "pdamp: settling the bed: t = 0.6000 s, kinetic energy 1e-05 J\n");
+  out.str("");
+  progress.message("pdamp: warning: w");
+  progress.end();
+  CHECK(out.str() == "pdamp: warning: w\n");
+}
+
+TEST_CASE("durations read as people write them") {
+  CHECK(format_duration(std::chrono::seconds(45)) == "45 s");
+  CHECK(format_duration(std::chrono::seconds(185)) == "3 min 05 s");
+  CHECK(format_duration(std::chrono::seconds(7800)) == "2 h 10 min");
+}

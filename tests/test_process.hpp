@@ -1,0 +1,76 @@
+#pragma once
+/// Starting the built executables from tests: arguments in, exit code and output back.
+
+#include <doctest/doctest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "test_support.hpp"
+
+extern char** environ;
+
+namespace pdamp::test {
+
+/// The argument vector of a program for exec and posix_spawn: the executable, then `args`.
+class Argv {
+ public:
+  Argv(const std::string& executable, const std::vector<std::string>& args) : words_{executable} {
+    words_.insert(words_.end(), args.begin(), args.end());
+    for (auto& word : words_) pointers_.push_back(word.data());
+    pointers_.push_back(nullptr);
+  }
+  const char* program() const { return words_.front().c_str(); }
+  char** get() { return pointers_.data(); }
+
+ private:
+  std::vector<std::string> words_;
+  std::vector<char*> pointers_;
+};
+
+/// An executable (pdamp unless named) started with arguments, its stdout and stderr
+/// captured in `<stem>.out` and `<stem>.err` of a directory.
+class Process {
+ public:
+  Process(const std::vector<std::string>& args, const TempDir& dir, const std::string& stem = "pdamp")
+      : Process(PDAMP_EXECUTABLE, args, dir, stem) {}
+  Process(const std::string& executable, const std::vector<std::string>& args, const TempDir& dir,
+          const std::string& stem = "pdamp")
+      : out_(dir / (stem + ".out")), err_(dir / (stem + ".err")) {
+    Argv argv(executable, args);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    REQUIRE(posix_spawn(&pid_, argv.program(), &actions, nullptr, argv.get(), environ) == 0);
+    posix_spawn_file_actions_destroy(&actions);
+  }
+  /// Waits for the exit and returns the exit code (128 + signal if killed).
+  int wait() {
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  void signal(int number) const { kill(pid_, number); }
+  std::string out() const { return slurp(out_); }
+  std::string err() const { return slurp(err_); }
+
+ private:
+  static std::string slurp(const std::filesystem::path& file) {
+    std::ifstream in(file);
+    std::ostringstream text;
+    text << in.rdbuf();
+    return text.str();
+  }
+  pid_t pid_ = 0;
+  std::filesystem::path out_, err_;
+};
+
+}  // namespace pdamp::test

@@ -1,0 +1,158 @@
+/// Many pdamp processes writing one store at once while a reader queries it: every run
+/// ends completed with all its samples and cycles.
+#include <doctest/doctest.h>
+
+#include <atomic>
+#include <chrono>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "pdamp/model/host.hpp"
+#include "pdamp/model/placement.hpp"
+#include "pdamp/sim/initial_bed.hpp"
+#include "pdamp/store/run_store.hpp"
+#include "test_process.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+
+namespace {
+
+constexpr int writers = 8;                    // half soft, half hard
+constexpr double sample_interval_s = 0.0005;  // table1.ini's
+
+std::string table1() { return test::scenario_file("table1").string(); }
+
+/// Stores Table 1's placement as the bed its runs start from, under its settle key, so
+/// the runs start at once: settling 1246 spheres takes 10-20 s, and this test is about
+/// the store, not the bed.
+void store_placed_bed(const std::filesystem::path& db) {
+  const Scenario s = load_scenario(table1());
+  RunStore store(db);
+  store.save_initial_state(settle_key(s), place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m), 0.0,
+                           0.0, 0.0);
+}
+
+/// Queries the store over and over from its own connection until destroyed.
+class Reader {
+ public:
+  explicit Reader(std::filesystem::path db) : thread_([this, db] { loop(db); }) {}
+  ~Reader() {
+    stop_ = true;
+    thread_.join();
+  }
+  int queries() const { return queries_; }
+  const std::vector<std::string>& errors() const { return errors_; }
+
+ private:
+  void loop(const std::filesystem::path& db) {
+    while (!stop_) {
+      try {
+        sqlite::Database d(db);
+        sqlite::Statement q(d, "SELECT count(*), sum(n_samples), sum(n_cycles) FROM run_summary");
+        q.step();
+        ++queries_;
+      } catch (const std::exception& e) {
+        errors_.emplace_back(e.what());
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+  std::atomic<bool> stop_{false};
+  int queries_ = 0;
+  std::vector<std::string> errors_;
+  std::thread thread_;
+};
+
+std::int64_t scalar(sqlite::Database& d, const std::string& sql) {
+  sqlite::Statement q(d, sql);
+  REQUIRE(q.step());
+  return q.column_int(0);
+}
+
+/// Starts `writers` runs of Table 1 into `db` at once, alternately soft and hard, with a
+/// reader querying throughout; checks every process and every stored run.
+void run_trial(const test::TempDir& dir, const std::filesystem::path& db, double soft_s, double hard_s) {
+  std::int64_t before = 0;
+  {
+    sqlite::Database d(db);
+    before = scalar(d, "SELECT coalesce(max(run_id), 0) FROM runs");
+  }
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<test::Process> runs;
+  int reader_queries = 0;
+  {
+    Reader reader(db);
+    for (int i = 0; i < writers; ++i) {
+      const bool hard = i % 2 == 1;
+      runs.emplace_back(
+          std::vector<std::string>{"run", "--scenario", table1(), "--model", hard ? "hard" : "soft", "--duration",
+                                   std::to_string(hard ? hard_s : soft_s), "--threads", "1", "--db", db.string()},
+          dir, "writer" + std::to_string(i));
+    }
+    for (int i = 0; i < writers; ++i) {
+      CAPTURE(i);
+      const int code = runs[static_cast<std::size_t>(i)].wait();
+      INFO(runs[static_cast<std::size_t>(i)].err());
+      CHECK(code == 0);
+    }
+    reader_queries = reader.queries();
+    CHECK(reader.errors().empty());
+    for (const auto& e : reader.errors()) MESSAGE("reader: " << e);
+  }
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  MESSAGE(writers << " runs (soft " << soft_s << " s, hard " << hard_s << " s) in " << wall_s << " s; reader "
+                  << reader_queries << " queries");
+  CHECK(reader_queries > 0);
+
+  sqlite::Database d(db);
+  const std::string mine = " run_id > " + std::to_string(before);
+  CHECK(scalar(d, "SELECT count(*) FROM runs WHERE" + mine) == writers);
+  CHECK(scalar(d, "SELECT count(*) FROM runs WHERE status = 'completed' AND" + mine) == writers);
+  for (const auto& [model, duration] :
+       {std::pair{std::string("soft"), soft_s}, std::pair{std::string("hard"), hard_s}}) {
+    CAPTURE(model);
+    const std::string of_model = " FROM run_summary WHERE model = '" + model + "' AND" + mine;
+    const auto samples = std::llround(duration / sample_interval_s) + 1;
+    CHECK(scalar(d, "SELECT min(n_samples)" + of_model) == samples);
+    CHECK(scalar(d, "SELECT max(n_samples)" + of_model) == samples);
+    // Same scenario, bed and seed: the same cycles and the same bits in every sample.
+    const std::int64_t cycles = scalar(d, "SELECT min(n_cycles)" + of_model);
+    CHECK(cycles >= 1);
+    CHECK(scalar(d, "SELECT max(n_cycles)" + of_model) == cycles);
+    const std::int64_t first = scalar(d, "SELECT min(run_id)" + of_model);
+    CHECK(scalar(d, "SELECT count(*) FROM samples a JOIN samples b ON b.run_id = " + std::to_string(first) +
+                        " AND b.t_s = a.t_s AND b.host_z_m = a.host_z_m AND b.excitation_work_J = a.excitation_work_J "
+                        "AND b.dissipated_impact_J = a.dissipated_impact_J JOIN runs r ON r.run_id = a.run_id "
+                        "WHERE r.model = '" +
+                        model + "' AND r." + mine.substr(1)) == samples * writers / 2);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("eight processes run Table 1 into one store at once, a reader querying: every run complete") {
+  test::TempDir dir("concurrent-runs");
+  const auto db = dir / "runs.sqlite";
+  store_placed_bed(db);
+  for (int trial = 0; trial < 2; ++trial) {
+    CAPTURE(trial);
+    run_trial(dir, db, 0.065, 0.12);
+  }
+}
+
+TEST_CASE("eight processes settle and run full Table 1 into one new store: three trials" *
+          doctest::test_suite("slow")) {
+  test::TempDir dir("concurrent-runs-full");
+  const auto db = dir / "runs.sqlite";
+  RunStore{db};  // the schema, without a bed: every process settles it in the first trial
+  for (int trial = 0; trial < 3; ++trial) {
+    CAPTURE(trial);
+    run_trial(dir, db, 0.2, 1.5);
+  }
+  // All settled the same bed at once in the first trial; the first stored stays.
+  sqlite::Database d(db);
+  CHECK(scalar(d, "SELECT count(*) FROM initial_states") == 1);
+  CHECK(scalar(d, "SELECT count(DISTINCT initial_state_id) FROM runs") == 1);
+}

@@ -34,13 +34,16 @@ void store_placed_bed(const std::filesystem::path& db) {
                            0.0, 0.0);
 }
 
-/// Queries the store over and over from its own connection until destroyed.
+/// Lists the runs over and over, each time from a new read-only connection as `pdamp runs`
+/// does, until stopped.
 class Reader {
  public:
   explicit Reader(std::filesystem::path db) : thread_([this, db] { loop(db); }) {}
-  ~Reader() {
+  ~Reader() { stop(); }
+  /// Stops reading; then queries() and errors() say how it went.
+  void stop() {
     stop_ = true;
-    thread_.join();
+    if (thread_.joinable()) thread_.join();
   }
   int queries() const { return queries_; }
   const std::vector<std::string>& errors() const { return errors_; }
@@ -49,9 +52,7 @@ class Reader {
   void loop(const std::filesystem::path& db) {
     while (!stop_) {
       try {
-        sqlite::Database d(db);
-        sqlite::Statement q(d, "SELECT count(*), sum(n_samples), sum(n_cycles) FROM run_summary");
-        q.step();
+        RunStore(db, StoreAccess::read).list_runs();
         ++queries_;
       } catch (const std::exception& e) {
         errors_.emplace_back(e.what());
@@ -81,30 +82,27 @@ void run_trial(const test::TempDir& dir, const std::filesystem::path& db, double
   }
   const auto start = std::chrono::steady_clock::now();
   std::vector<test::Process> runs;
-  int reader_queries = 0;
-  {
-    Reader reader(db);
-    for (int i = 0; i < writers; ++i) {
-      const bool hard = i % 2 == 1;
-      runs.emplace_back(
-          std::vector<std::string>{"run", "--scenario", table1(), "--model", hard ? "hard" : "soft", "--duration",
-                                   std::to_string(hard ? hard_s : soft_s), "--threads", "1", "--db", db.string()},
-          dir, "writer" + std::to_string(i));
-    }
-    for (int i = 0; i < writers; ++i) {
-      CAPTURE(i);
-      const int code = runs[static_cast<std::size_t>(i)].wait();
-      INFO(runs[static_cast<std::size_t>(i)].err());
-      CHECK(code == 0);
-    }
-    reader_queries = reader.queries();
-    CHECK(reader.errors().empty());
-    for (const auto& e : reader.errors()) MESSAGE("reader: " << e);
+  Reader reader(db);
+  for (int i = 0; i < writers; ++i) {
+    const bool hard = i % 2 == 1;
+    runs.emplace_back(
+        std::vector<std::string>{"run", "--scenario", table1(), "--model", hard ? "hard" : "soft", "--duration",
+                                 std::to_string(hard ? hard_s : soft_s), "--threads", "1", "--db", db.string()},
+        dir, "writer" + std::to_string(i));
   }
+  for (int i = 0; i < writers; ++i) {
+    CAPTURE(i);
+    const int code = runs[static_cast<std::size_t>(i)].wait();
+    INFO(runs[static_cast<std::size_t>(i)].err());
+    CHECK(code == 0);
+  }
+  reader.stop();
+  CHECK(reader.errors().empty());
+  for (const auto& e : reader.errors()) MESSAGE("reader: " << e);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   MESSAGE(writers << " runs (soft " << soft_s << " s, hard " << hard_s << " s) in " << wall_s << " s; reader "
-                  << reader_queries << " queries");
-  CHECK(reader_queries > 0);
+                  << reader.queries() << " queries");
+  CHECK(reader.queries() > 0);
 
   sqlite::Database d(db);
   const std::string mine = " run_id > " + std::to_string(before);

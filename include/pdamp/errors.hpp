@@ -22,7 +22,8 @@ class RuntimeFailure : public std::runtime_error {
 
 namespace pdamp {
 
-/// The user asked to stop (SIGINT, SIGTERM) before a run began (e.g. while settling).
+/// The user asked to stop (SIGINT, SIGTERM) before a run began to compute (e.g. while its bed
+/// settled); the run is stored as interrupted.
 class Interrupted : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -285,38 +285,44 @@ void store_host_run(const test::TempDir& dir, const std::filesystem::path& db) {
               .code == 0);
 }
 
-/// Runs pdamp as a user who can read the test directory but write neither it nor its
-/// files: `nobody` when the tests run as root (root writes anything), else the test's
-/// user with the directory and its files made read-only.
-Result pdamp_read_only(const std::vector<std::string>& args, const test::TempDir& dir) {
-  std::vector<std::filesystem::path> files;
-  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) files.push_back(entry.path());
-  using std::filesystem::perms;
-  for (const auto& f : files)
-    std::filesystem::permissions(f, perms::owner_read | perms::group_read | perms::others_read);
-  std::filesystem::permissions(dir.path(), perms::owner_read | perms::owner_exec | perms::others_read |
-                                               perms::others_exec | perms::group_read | perms::group_exec);
-  const auto out = std::filesystem::temp_directory_path() / ("pdamp-read-only-" + std::to_string(getpid()));
-  test::Argv argv(PDAMP_EXECUTABLE, args);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int out_fd = open((out.string() + ".out").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int err_fd = open((out.string() + ".err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    dup2(out_fd, 1);
-    dup2(err_fd, 2);
-    if (geteuid() == 0 && (setgroups(0, nullptr) != 0 || setgid(65534) != 0 || setuid(65534) != 0)) _exit(126);
-    execv(argv.program(), argv.get());
-    _exit(127);
+/// Runs pdamp as a user who can read a directory but write neither it nor its files:
+/// `nobody` when the tests run as root (root writes anything), else the test's user with
+/// the directory and its files made read-only. pdamp and Table 1's scenario are copied
+/// where any user can run and read them (the build and source trees may be private).
+class ReadOnlyUser {
+ public:
+  ReadOnlyUser() : staging_("cli-read-only-user") {
+    std::filesystem::copy_file(PDAMP_EXECUTABLE, staging_ / "pdamp");
+    std::filesystem::copy_file(table1(), staging_ / "table1.ini");
   }
-  int status = 0;
-  waitpid(pid, &status, 0);
-  std::filesystem::permissions(dir.path(), perms::owner_all, std::filesystem::perm_options::add);
-  Result r{WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), file_bytes(out.string() + ".out"),
-           file_bytes(out.string() + ".err")};
-  std::filesystem::remove(out.string() + ".out");
-  std::filesystem::remove(out.string() + ".err");
-  return r;
-}
+  std::string scenario() const { return (staging_ / "table1.ini").string(); }
+
+  Result run(const std::vector<std::string>& args, const test::TempDir& dir) const {
+    using std::filesystem::perms;
+    for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+      std::filesystem::permissions(entry.path(), perms::owner_read | perms::group_read | perms::others_read);
+    }
+    std::filesystem::permissions(dir.path(), perms::owner_read | perms::owner_exec | perms::group_read |
+                                                 perms::group_exec | perms::others_read | perms::others_exec);
+    test::Argv argv((staging_ / "pdamp").string(), args);
+    const pid_t pid = fork();
+    if (pid == 0) {
+      dup2(open((staging_ / "out").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644), 1);
+      dup2(open((staging_ / "err").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644), 2);
+      if (geteuid() == 0 && (setgroups(0, nullptr) != 0 || setgid(65534) != 0 || setuid(65534) != 0)) _exit(126);
+      execv(argv.program(), argv.get());
+      _exit(127);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    std::filesystem::permissions(dir.path(), perms::owner_all, std::filesystem::perm_options::add);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), file_bytes(staging_ / "out"),
+            file_bytes(staging_ / "err")};
+  }
+
+ private:
+  test::TempDir staging_;
+};
 
 /// Runs pdamp with its stderr on a pseudo-terminal for `seconds`, then stops it with
 /// SIGTERM; returns what it wrote to the terminal.
@@ -503,16 +509,17 @@ TEST_CASE("a store its reader cannot write lists and shows runs") {
   test::TempDir dir("cli-read-only");
   const auto db = dir / "runs.sqlite";
   store_host_run(dir, db);
-  const Result runs = pdamp_read_only({"runs", "--db", db.string()}, dir);
+  const ReadOnlyUser user;
+  const Result runs = user.run({"runs", "--db", db.string()}, dir);
   INFO(runs.err);
   CHECK(runs.code == 0);
   CHECK(runs.out.find("table1") != std::string::npos);
-  const Result show = pdamp_read_only({"show", "1", "--db", db.string()}, dir);
+  const Result show = user.run({"show", "1", "--db", db.string()}, dir);
   CHECK(show.code == 0);
   CHECK(show.out.find("run 1: hard model") != std::string::npos);
-  const Result run = pdamp_read_only({"run", "--scenario", table1(), "--model", "hard", "--set", "particles.count=0",
-                                      "--duration", "0.01", "--db", db.string()},
-                                     dir);
+  const Result run = user.run({"run", "--scenario", user.scenario(), "--model", "hard", "--set", "particles.count=0",
+                               "--duration", "0.01", "--db", db.string()},
+                              dir);
   CHECK(run.code == 2);
   CHECK(run.err.find("readonly database") != std::string::npos);
   CHECK(count_rows(db, "SELECT count(*) FROM runs") == 1);

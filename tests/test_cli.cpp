@@ -5,6 +5,8 @@
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -137,6 +139,29 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
       {{"run", "--scenario", table1(), "--model", "soft", "--simd", "avx1024", "--db", db.string()},
        "--simd 'avx1024': must be sse2, avx2 or avx512"},
       {{"runs", "--db", (dir / "missing.sqlite").string()}, "does not exist"},
+      // Inputs that once hung, crashed or filled the disk: refused, naming the key.
+      {{"run", "--scenario", table1(), "--model", "soft", "--set", "soft.kn_N_m1_5=1e308", "--db", db.string()},
+       "run.max_steps = 1000000000: settling the bed"},
+      {{"run", "--scenario", table1(), "--model", "hard", "--set", "host.mass_kg=1e-300", "--db", db.string()},
+       "run.max_steps = 1000000000: observing the run every"},
+      {{"run", "--scenario", table1(), "--model", "hard", "--set", "particles.density_kg_m3=1e308", "--db",
+        db.string()},
+       "particles.density_kg_m3 = '1e308'"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--set", "run.sample_interval_s=1e-300", "--db", db.string()},
+       "run.max_samples = 1000000"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--set", "soft.cn_N_s_m=1000", "--db", db.string()},
+       "soft.cn_N_s_m"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--set", "run.dt_s=1e-6", "--set", "soft.cn_N_s_m=5", "--db",
+        db.string()},
+       "relaxes in tau = m/c"},
+      {{"run", "--scenario", dir.path().string(), "--model", "soft", "--db", db.string()},
+       "is a directory, not a regular file"},
+      {{"run", "--scenario", "/dev/zero", "--model", "soft", "--db", db.string()}, "is a device, not a regular file"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--set", "scenario.name=run#7", "--db", db.string()},
+       "a value cannot contain '#'"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--set", "host.z0_m=0.01\nhost.mass_kg=1", "--db",
+        db.string()},
+       "without line breaks"},
   };
   for (const auto& c : cases) {
     CAPTURE(c.expected);
@@ -216,7 +241,8 @@ namespace {
 /// Starts a run that would take hours and waits until it has committed samples.
 Process start_endless_run(const test::TempDir& dir, const std::filesystem::path& db) {
   Process p({"run", "--scenario", table1(), "--model", "soft", "--set", "particles.count=0", "--set",
-             "run.sample_interval_s=1e-5", "--duration", "1e5", "--db", db.string()},
+             "run.sample_interval_s=1e-5", "--duration", "1e5", "--set", "run.max_samples=1e11", "--set",
+             "run.max_steps=1e11", "--db", db.string()},
             dir);
   for (int i = 0; i < 200; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -564,4 +590,125 @@ TEST_CASE("progress on a terminal: percent and time left on one line") {
   CHECK(text.find(" of 200.0000 s, ") != std::string::npos);
   CHECK(text.find(" %, ") != std::string::npos);
   CHECK(text.find(" left\x1b[K") != std::string::npos);
+}
+
+TEST_CASE("a FIFO as the scenario is refused at once, not waited on") {
+  test::TempDir dir("cli-fifo");
+  const auto fifo = dir / "scenario.ini";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  Process p({"check", "--scenario", fifo.string()}, dir);
+  CHECK(p.wait_at_most(std::chrono::seconds(5)) == 2);
+  CHECK(p.err().find("is a FIFO, not a regular file") != std::string::npos);
+}
+
+TEST_CASE("check counts a wide cavity's capacity in bounded time and memory, and refuses a vast one at once") {
+  test::TempDir dir("cli-wide");
+  struct Case {
+    std::string diameter;
+    int code;
+  };
+  // 0.4 m took 3.1 GB and 18 s when every lattice site was listed; 1 m ran out of memory.
+  for (const Case& c : {Case{"0.4", 0}, Case{"1", 0}, Case{"1e6", 2}}) {
+    CAPTURE(c.diameter);
+    const auto start = std::chrono::steady_clock::now();
+    Process p({"check", "--scenario", table1(), "--set", "cavity.diameter_m=" + c.diameter}, dir);
+    CHECK(p.wait_at_most(std::chrono::seconds(10)) == c.code);
+    CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(2));
+    CHECK(p.peak_memory_kB() < 100'000);
+  }
+}
+
+TEST_CASE("--set and --duration: for a key given twice the last on the command line wins") {
+  test::TempDir dir("cli-order");
+  const auto db = (dir / "runs.sqlite").string();
+  auto simulated = [&](const std::vector<std::string>& order) {
+    std::vector<std::string> args{"run",   "--scenario",        table1(), "--model", "hard",
+                                  "--set", "particles.count=0", "--db",   db};
+    args.insert(args.end(), order.begin(), order.end());
+    const Result r = pdamp_cli(args, dir);
+    REQUIRE(r.code == 0);
+    const auto at = r.out.find("simulated");
+    REQUIRE(at != std::string::npos);
+    return std::stod(r.out.substr(at + 9));
+  };
+  CHECK(simulated({"--set", "run.duration_s=0.1", "--duration", "0.2"}) == 0.2);
+  CHECK(simulated({"--duration", "0.2", "--set", "run.duration_s=0.1"}) == 0.1);
+  CHECK(simulated({"--duration", "0.2", "--duration", "0.15"}) == 0.15);
+  CHECK(simulated({"--set", "run.duration_s=0.2", "--set", "run.duration_s=0.05"}) == 0.05);
+}
+
+TEST_CASE("a large normal dashpot: the automatic step resolves it, the run completes and keeps its books") {
+  // c_n = 40 on 1.5 mm lead spheres: c_n dt / m* was 10 at the old automatic step, and the
+  // run crashed on a position that was not a number. Without gravity: no settling.
+  test::TempDir dir("cli-dashpot");
+  const auto db = dir / "runs.sqlite";
+  const Result r = pdamp_cli(
+      {"run", "--scenario", test::scenario_file("small").string(), "--model", "soft", "--set", "soft.cn_N_s_m=40",
+       "--set", "gravity.g_m_s2=0", "--set", "particles.count=20", "--duration", "0.01", "--db", db.string()},
+      dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  RunStore store(db);
+  const auto s = store.summary(1);
+  REQUIRE(s);
+  CHECK(s->status == "completed");
+  REQUIRE(s->energy_balance_rel_err.has_value());
+  CHECK(*s->energy_balance_rel_err < 1e-5);
+  const Result check =
+      pdamp_cli({"check", "--scenario", test::scenario_file("small").string(), "--set", "soft.cn_N_s_m=40"}, dir);
+  CHECK(check.out.find("(automatic: tau/10)") != std::string::npos);
+  CHECK(check.out.find("the sphere-sphere normal dashpot soft.cn_N_s_m") != std::string::npos);
+}
+
+namespace {
+
+/// Signals `p` and returns how long it took to exit, and its exit code.
+std::pair<std::chrono::duration<double>, int> stop_and_time(Process& p, int signal_number) {
+  const auto start = std::chrono::steady_clock::now();
+  p.signal(signal_number);
+  const int code = p.wait_at_most(std::chrono::seconds(30));
+  return {std::chrono::steady_clock::now() - start, code};
+}
+
+}  // namespace
+
+TEST_CASE("SIGTERM inside a long advance of the engine ends the run within a second, stored as interrupted") {
+  // Each observation is 0.1 s apart in steps of 2e-8 s: five million steps an advance.
+  test::TempDir dir("cli-long-advance");
+  const auto db = dir / "runs.sqlite";
+  Process p({"run", "--scenario", test::scenario_file("small").string(), "--model", "soft", "--set", "soft.cn_N_s_m=40",
+             "--set", "gravity.g_m_s2=0", "--set", "host.stiffness_N_m=1e-3", "--set", "run.sample_interval_s=0.1",
+             "--set", "run.max_steps=1e10", "--duration", "100", "--db", db.string()},
+            dir);
+  for (int i = 0; i < 200; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (std::filesystem::exists(db) && count_rows(db, "SELECT count(*) FROM sqlite_master WHERE name = 'runs'") > 0 &&
+        count_rows(db, "SELECT count(*) FROM runs") > 0) {
+      break;
+    }
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const auto [took, code] = stop_and_time(p, SIGTERM);
+  CHECK(code == 128 + SIGTERM);
+  CHECK(took < std::chrono::seconds(1));
+  RunStore store(db);
+  const auto s = store.summary(1);
+  REQUIRE(s);
+  CHECK(s->status == "interrupted");
+}
+
+TEST_CASE("SIGINT while the bed settles ends pdamp within a second") {
+  // Settling c_n = 40 takes minutes in steps of 2e-8 s.
+  test::TempDir dir("cli-settling-sigint");
+  const auto db = dir / "runs.sqlite";
+  Process p({"run", "--scenario", test::scenario_file("small").string(), "--model", "hard", "--set", "soft.cn_N_s_m=40",
+             "--db", db.string()},
+            dir);
+  for (int i = 0; i < 200 && !std::filesystem::exists(db); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  const auto [took, code] = stop_and_time(p, SIGINT);
+  CHECK(code == 128 + SIGINT);
+  CHECK(took < std::chrono::seconds(1));
+  CHECK(p.err().find("stopped while settling the bed") != std::string::npos);
 }

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -550,4 +551,28 @@ TEST_CASE("jam: Table 4's 250 Hz bed, hit by a cap at 15 m/s, gets past the wedg
   CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
   CHECK(test::statistic(engine, "jam_stuck_to_host") > 0);
   CHECK(outcome.energy_balance_rel_err <= 1e-9);
+}
+
+TEST_CASE("a stop request ends advance_to within 4096 events, and run.max_events ends the run there") {
+  Scenario s = benchmark_gas(200);
+  std::atomic<bool> stop{false};
+  {
+    HardEngine engine(s, moving_spheres(s, 1.0, 0.0, 3));
+    engine.set_stop_request(&stop);
+    engine.advance_to(0.01);
+    const std::int64_t before = engine.collisions();
+    CHECK(before > 4096);
+    stop = true;
+    CHECK_THROWS_AS(engine.advance_to(10.0), Interrupted);
+    CHECK(engine.collisions() - before <= 4096);
+  }
+  s.run.max_events = 5000;
+  HardEngine engine(s, moving_spheres(s, 1.0, 0.0, 3));
+  CHECK_THROWS_WITH_AS(engine.advance_to(10.0), doctest::Contains("reached run.max_events = 5000"), RuntimeFailure);
+  std::int64_t events = 0;
+  for (const auto& [name, value] : engine.statistics()) {
+    if (name.starts_with("events_")) events += value;
+  }
+  CHECK(events <= 5000);  // the one past the bound is popped, not handled
+  CHECK(events > 4000);
 }

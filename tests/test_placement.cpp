@@ -1,5 +1,10 @@
 #include <doctest/doctest.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+
 #include "pdamp/errors.hpp"
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/placement.hpp"
@@ -90,4 +95,61 @@ TEST_CASE("a deep bed's overlaps, which add up along its columns, are separated"
   check_valid(p, cavity, 0.0);
   CHECK(moved >= 40 * overlap);
   CHECK(moved < 0.05 * r * 40);
+}
+
+namespace {
+
+/// The lattice's sites as first written, visited one by one: the reference for the
+/// counts max_particles_that_fit makes without listing them.
+int sites_one_by_one(const CavitySettings& cavity, double diameter_m) {
+  const double radius_m = diameter_m / 2.0 + 1e-12 * std::max(cavity.diameter_m, cavity.height_m);
+  const double spacing_m = 2.0 * radius_m;
+  const double reach = cavity.radius_m() - radius_m;
+  const double layer_gap = spacing_m * std::sqrt(2.0 / 3.0);
+  const double row_gap = spacing_m * std::sqrt(3.0) / 2.0;
+  if (reach < 0) return 0;
+  const int half_rows = static_cast<int>(std::ceil(reach / row_gap)) + 1;
+  const int half_cols = static_cast<int>(std::ceil(reach / spacing_m)) + 1;
+  int sites = 0, layer = 0;
+  for (double z = radius_m; z <= cavity.height_m - radius_m; z = radius_m + (++layer) * layer_gap) {
+    const double shift_x = (layer % 2) * spacing_m / 2.0, shift_y = (layer % 2) * row_gap / 3.0;
+    for (int row = -half_rows; row <= half_rows; ++row) {
+      const double y = row * row_gap + shift_y;
+      const double row_shift = (std::abs(row) % 2) * spacing_m / 2.0;
+      for (int col = -half_cols; col <= half_cols; ++col) {
+        sites += std::hypot(col * spacing_m + row_shift + shift_x, y) <= reach;
+      }
+    }
+  }
+  return sites;
+}
+
+}  // namespace
+
+TEST_CASE("placement: capacities are counted row by row, as many as the lattice has sites") {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> across(1.05, 40.0), tall(1.05, 25.0);
+  for (int k = 0; k < 300; ++k) {
+    const double d = 0.001;
+    const CavitySettings cavity{across(rng) * d, tall(rng) * d};
+    CAPTURE(cavity.diameter_m);
+    CAPTURE(cavity.height_m);
+    const int capacity = max_particles_that_fit(cavity, d);
+    REQUIRE(capacity == sites_one_by_one(cavity, d));
+    if (k % 30 == 0 && capacity > 0) {
+      check_valid(place_particles({capacity, d, d, 9000, 1}, cavity, 0.0), cavity, 0.0);
+    }
+  }
+}
+
+TEST_CASE("placement: a vast cavity is counted in bounded time, and a few spheres placed in it") {
+  const auto start = std::chrono::steady_clock::now();
+  for (const CavitySettings cavity :
+       {CavitySettings{1e6, 1e6}, CavitySettings{0.002, 1e6}, CavitySettings{1e6, 0.0015}}) {
+    CHECK(max_particles_that_fit(cavity, 0.001) == max_particle_count);
+  }
+  CHECK(max_particles_that_fit({1e300, 1e300}, 0.001) == max_particle_count);
+  const CavitySettings room{10.0, 3.0};
+  check_valid(place_particles({50, 0.001, 0.001, 9000, 1}, room, 0.0), room, 0.0);
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(2));
 }

@@ -5,12 +5,15 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "test_support.hpp"
@@ -55,9 +58,29 @@ class Process {
   /// Waits for the exit and returns the exit code (128 + signal if killed).
   int wait() {
     int status = 0;
-    waitpid(pid_, &status, 0);
+    rusage usage{};
+    wait4(pid_, &status, 0, &usage);
+    peak_memory_kB_ = usage.ru_maxrss;
     return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   }
+  /// The exit code if the process ends within `limit`; otherwise kills it and returns -1.
+  int wait_at_most(std::chrono::duration<double> limit) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < end) {
+      int status = 0;
+      rusage usage{};
+      if (wait4(pid_, &status, WNOHANG, &usage) == pid_) {
+        peak_memory_kB_ = usage.ru_maxrss;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    signal(SIGKILL);
+    wait();
+    return -1;
+  }
+  /// The largest resident set the process had (kB), once it has been waited for.
+  long peak_memory_kB() const { return peak_memory_kB_; }
   void signal(int number) const { kill(pid_, number); }
   std::string out() const { return slurp(out_); }
   std::string err() const { return slurp(err_); }
@@ -70,6 +93,7 @@ class Process {
     return text.str();
   }
   pid_t pid_ = 0;
+  long peak_memory_kB_ = 0;
   std::filesystem::path out_, err_;
 };
 

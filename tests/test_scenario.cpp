@@ -1,4 +1,10 @@
 #include <doctest/doctest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
 
 #include "pdamp/errors.hpp"
 #include "test_support.hpp"
@@ -155,4 +161,114 @@ TEST_CASE("every scenario in data/scenarios loads and validates") {
     ++count;
   }
   CHECK(count >= 10);
+}
+
+TEST_CASE("'#' starts a comment after a space, and inside a value it is refused, never cut") {
+  CHECK(scenario_from("[scenario]\nname = run 7   # the seventh\n").name == "run 7");
+  CHECK(scenario_from("# [host]\n[host]\n#mass_kg = 1\nmass_kg = 0.05\t# tab before the comment\n").host.mass_kg ==
+        0.05);
+  const std::string glued = input_error("[scenario]\nname = run#7 final\n");
+  CHECK(contains(glued, "line 2"));
+  CHECK(contains(glued, "'#' directly after text"));
+  CHECK(contains(input_error("[host]\nmass_kg = 0.05#kg\n"), "'#' directly after text"));
+  CHECK(contains(input_error("", {"scenario.name=run#7"}), "a value cannot contain '#'"));
+  CHECK(contains(input_error("", {"scenario.name=run #7"}), "a value cannot contain '#'"));
+}
+
+TEST_CASE("a --set is one line: a line break in it is refused, not read as more keys") {
+  const std::string message = input_error("", {"host.z0_m=0.01\nhost.mass_kg=1"});
+  CHECK(contains(message, "without line breaks"));
+  CHECK(contains(message, "host.z0_m=0.01\\x0ahost.mass_kg=1"));  // shown, not broken
+  CHECK(contains(input_error("", {"host.z0_m=0.01\r"}), "without line breaks"));
+  CHECK(contains(input_error("", {std::string("host.z0_m=0.01\0x", 16)}), "without line breaks"));
+}
+
+TEST_CASE("a key set twice on the command line takes the last value, and a file may give a key once") {
+  const Scenario s = scenario_from("[host]\nz0_m = 0.005\n", {"host.z0_m=0.01", "host.z0_m=0.02"});
+  CHECK(s.host.z0_m == 0.02);
+  CHECK(scenario_from("", {"run.duration_s=0.2", "run.duration_s=0.1"}).run.duration_s == 0.1);
+  CHECK(contains(input_error("[host]\nz0_m = 0.01\n[host]\nz0_m = 0.02\n"),
+                 "line 4: key 'host.z0_m' is given more than once"));
+}
+
+TEST_CASE("a UTF-8 byte-order mark at the start of a file is skipped, and an invisible byte elsewhere is named") {
+  CHECK(scenario_from("\xEF\xBB\xBF[host]\nmass_kg = 0.05\n").host.mass_kg == 0.05);
+  CHECK(contains(input_error("[host]\n\xEF\xBB\xBFmass_kg = 0.05\n"), "unknown key 'host.\\xef\\xbb\\xbfmass_kg'"));
+  CHECK(contains(input_error("[host]\nmass_kg\xE2\x80\x8B = 1\n"), "unknown key 'host.mass_kg\\xe2\\x80\\x8b'"));
+  CHECK(contains(input_error("[host]\nmass_kg = 0.05\xC2\xA0\n"), "'0.05\\xc2\\xa0'"));
+  CHECK(contains(input_error(std::string("[host]\nmass_kg = 0.05\n\0", 23)), "a NUL byte at offset 22"));
+  CHECK(contains(input_error("[host]\nmass_kg\n"), "line 2: 'mass_kg' is not a 'key = value' line"));
+}
+
+TEST_CASE("the bounds of a run are keys, whole numbers up to 2^53") {
+  const Scenario s = scenario_from("[run]\nmax_steps = 2e9\nmax_samples = 5000\nmax_events = 123\n");
+  CHECK(s.run.max_steps == 2'000'000'000);
+  CHECK(s.run.max_samples == 5000);
+  CHECK(s.run.max_events == 123);
+  const Scenario defaults = scenario_from("");
+  CHECK(defaults.run.max_steps == 1'000'000'000);
+  CHECK(defaults.run.max_samples == 1'000'000);
+  CHECK(defaults.run.max_events == 10'000'000'000);
+  CHECK(contains(input_error("[run]\nmax_steps = 0\n"), "run.max_steps = '0': must be a whole number from 1 to"));
+  CHECK(contains(input_error("[run]\nmax_samples = 1e300\n"), "run.max_samples"));
+  CHECK(contains(input_error("[run]\nmax_events = 1.5\n"), "whole number"));
+}
+
+TEST_CASE("spheres whose mass or inertia double precision cannot hold are refused") {
+  CHECK(contains(input_error("[particles]\ndensity_kg_m3 = 1e308\n"), "particles.density_kg_m3 = '1e308'"));
+  CHECK(contains(input_error("[particles]\ndensity_kg_m3 = 1e-300\n"), "beyond what double precision holds"));
+  CHECK(contains(input_error("[particles]\ndiameter_m = 1e-300 1e-299\n"), "particles.density_kg_m3"));
+}
+
+TEST_CASE("a cavity far larger than its spheres is refused at once, naming the cell grid it would need") {
+  const auto start = std::chrono::steady_clock::now();
+  const std::string message = input_error("[cavity]\ndiameter_m = 1e6\nheight_m = 1e6\n");
+  CHECK(contains(message, "cavity.diameter_m = '1e6' and cavity.height_m = '1e6'"));
+  CHECK(contains(message, "more than the 16777216"));
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
+  // A wide cavity whose grid fits: its capacity is counted, not listed.
+  CHECK(scenario_from("[cavity]\ndiameter_m = 0.4\n").cavity.diameter_m == 0.4);
+  const std::string tall =
+      input_error("[cavity]\ndiameter_m = 0.002\nheight_m = 1e6\n[particles]\ndiameter_m = 0.001\n");
+  CHECK(contains(tall, "cavity.diameter_m = '0.002' and cavity.height_m = '1e6'"));
+}
+
+namespace {
+
+/// A fresh directory, removed with its contents when done.
+struct ScratchDir {
+  std::filesystem::path path;
+  explicit ScratchDir(const std::string& name)
+      : path(std::filesystem::temp_directory_path() / ("pdamp-scenario-" + name + "-" + std::to_string(getpid()))) {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~ScratchDir() { std::filesystem::remove_all(path); }
+};
+
+std::string load_error(const std::filesystem::path& file) {
+  try {
+    load_scenario(file);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST_CASE("only a regular file of at most 1 MiB is read as a scenario: a FIFO, a device, a directory are refused") {
+  const ScratchDir dir("files");
+  const auto fifo = dir.path / "scenario.fifo";
+  REQUIRE(mkfifo(fifo.c_str(), 0600) == 0);
+  const auto start = std::chrono::steady_clock::now();
+  CHECK(contains(load_error(fifo), "is a FIFO, not a regular file"));  // nobody writes to it: it must not block
+  CHECK(std::chrono::steady_clock::now() - start < std::chrono::seconds(1));
+  CHECK(contains(load_error("/dev/zero"), "is a device, not a regular file"));
+  CHECK(contains(load_error(dir.path), "is a directory, not a regular file"));
+  const auto large = dir.path / "large.ini";
+  std::ofstream(large) << std::string(max_scenario_file_bytes, '#') << "\n";
+  CHECK(contains(load_error(large), "larger than 1048576 bytes"));
+  std::filesystem::resize_file(large, max_scenario_file_bytes);  // all comment: Table 1
+  CHECK(load_scenario(large).particles.count == 1246);
 }

@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <Eigen/Geometry>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -418,4 +419,102 @@ TEST_CASE("SIMD paths: every instruction set the CPU runs gives the same bits") 
     CHECK(other.observation.energy.dissipated_friction_J == reference.observation.energy.dissipated_friction_J);
     CHECK(other.observation.energy.contact_elastic_J == reference.observation.energy.contact_elastic_J);
   }
+}
+
+namespace {
+
+/// Overlap of the Hertz-dashpot contact at `t_s` after it begins at `speed_m_s`, by RK4 far
+/// finer than any engine step.
+double reference_overlap_m(double effective_mass_kg, double kn, double cn, double speed_m_s, double t_s) {
+  test::HertzDashpotContact contact{effective_mass_kg, kn, cn, 0.0, speed_m_s};
+  for (long k = std::lround(t_s / reference_dt_s); k > 0; --k) contact.step(reference_dt_s);
+  return contact.delta;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "a stiff dashpot sets the automatic step, which follows the Hertz-dashpot contact, and a step past its limit is "
+    "refused") {
+  // Such dashpots overdamp the paper's soft Hertz spring: the sphere stops within m/c and
+  // then creeps out of the floor for far longer than the 0.1 ms compared here.
+  const double m = 9000 * 4.0 / 3.0 * std::numbers::pi * 1.25e-10;  // 1 mm lead
+  const double r = 0.0005, speed = 0.5, gap = 1e-6, compared_s = 1e-4;
+  for (const double cn : {1.0, 10.0}) {
+    CAPTURE(cn);
+    const Scenario s = scenario_from(wide_cavity, {"particles.count=1", "soft.cn_N_s_m=" + std::to_string(cn)});
+    // The sphere-sphere pair (m* = m/2) relaxes fastest: tau = m / 2 c_n, and auto takes tau/10.
+    const Relaxation tau = shortest_relaxation(s);
+    CHECK(tau.time_s == doctest::Approx(0.5 * m / cn));
+    CHECK(tau.what.find("soft.cn_N_s_m") != std::string::npos);
+    CHECK(choose_time_step_s(s) == tau.time_s / 10);
+    // Without the dashpot's limit the step was T_s/8: at c_n = 10, c_n dt / m* = 2.4 > 2,
+    // where each step reverses the approach speed and amplifies it.
+    if (cn == 10.0) CHECK(shortest_tangential_period_s(s) / 8 / tau.time_s > 2);
+    SoftEngine engine(s, spheres({{0.001, 0.0, r + gap}}, {{0.0, 0.0, -speed}}, r), held());
+    const double e0 = engine.observe().energy.stored_J();
+    engine.advance_to(gap / speed + compared_s);
+    const double overlap = r - engine.state().particles.position_m(2, 0);
+    CHECK(overlap == doctest::Approx(reference_overlap_m(m, 3.6e5, cn, speed, compared_s)).epsilon(0.01));
+    CHECK(engine.observe().energy.balance_relative_error(e0) < 1e-3);
+    std::ostringstream step;
+    step << "run.dt_s=" << 0.51 * tau.time_s;
+    CHECK_THROWS_WITH_AS(choose_time_step_s(scenario_from(s.canonical_text, {step.str()})),
+                         doctest::Contains("soft.cn_N_s_m relaxes in tau = m/c"), InputError);
+  }
+  // The tangential dashpot on m_t = m/7, and the host's damper on M, likewise.
+  CHECK(shortest_relaxation(scenario_from(wide_cavity, {"soft.cs_N_s_m=10"})).what.find("soft.cs_N_s_m") !=
+        std::string::npos);
+  CHECK(shortest_relaxation(scenario_from(wide_cavity, {"host.damping_N_s_m=1e6"})).time_s == 0.0376 / 1e6);
+  // A prescribed host has no damper to resolve.
+  const Scenario prescribed = scenario_from(
+      "[host]\ndamping_N_s_m = 0.1\n[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 50\n");
+  CHECK(shortest_relaxation(prescribed).what.find("host") == std::string::npos);
+}
+
+TEST_CASE("at the refusal limit a sticking contact's spring and dashpot together stay stable") {
+  // c_s chosen so that T_s/4 = tau_t/2: the step at the limit has Omega = pi/2 and
+  // gamma = 1/2, Omega^2 + 2 gamma = 3.47 < 4 (time_step.hpp).
+  const double m = 9000 * 4.0 / 3.0 * std::numbers::pi * 1.25e-10;
+  const Scenario base = scenario_from(wide_cavity, {"particles.count=1"});
+  const double ts = shortest_tangential_period_s(base);  // the pair's, on m/7
+  std::ostringstream cs;
+  cs.precision(17);
+  cs << "soft.cs_N_s_m=" << 2.0 * (m / 7.0) / ts;
+  const Scenario probe = scenario_from(wide_cavity, {"particles.count=1", cs.str()});
+  CHECK(shortest_relaxation(probe).time_s == doctest::Approx(ts / 2));
+  std::ostringstream dt;
+  dt.precision(17);
+  dt << "run.dt_s=" << ts / 4 * (1 - 1e-12);
+  const Scenario s = scenario_from(probe.canonical_text, {dt.str()});
+  // A sliding drop that sticks as it rolls: the tangential spring and dashpot work together.
+  SoftEngine engine(s, spheres({{0.001, 0.0, 0.0005 + 1e-6}}, {{0.3, 0.0, -0.5}}), held());
+  const double e0 = engine.observe().energy.stored_J();
+  for (int k = 1; k <= 200; ++k) engine.advance_to(k * 1e-5);
+  const EnergyLedger e = engine.observe().energy;
+  CHECK(std::isfinite(e.stored_J()));
+  CHECK(e.stored_J() + e.dissipated_J() <= e0 * (1 + 1e-2));
+  CHECK(e.stored_J() < e0);
+}
+
+TEST_CASE("a state that stops being finite fails the engine with the reason, wherever it shows") {
+  const Scenario s = scenario_from(wide_cavity);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  SoftEngine engine(s, spheres({{0.002, 0.0, 0.005}, {-0.004, 0.0, 0.005}}, {{0.0, 0.0, nan}, {0.0, 0.0, 0.0}}),
+                    held());
+  CHECK_THROWS_WITH_AS(engine.advance_to(1e-4), doctest::Contains("state stopped being finite"), RuntimeFailure);
+  // Far off but finite: the neighbour list still finds a cell for it.
+  SoftEngine far(s, spheres({{0.002, 0.0, 0.005}}, {{0.0, 0.0, 1e300}}), held());
+  CHECK_THROWS_AS(far.advance_to(1e-4), RuntimeFailure);
+}
+
+TEST_CASE("a stop request ends advance_to within a step, and settling with it") {
+  const Scenario s = load_scenario(test::scenario_file("small"));
+  const Particles placement = place_particles(s.particles, s.cavity, s.host.z0_m);
+  std::atomic<bool> stop{true};
+  SoftEngine engine(s, placement);
+  engine.set_stop_request(&stop);
+  CHECK_THROWS_AS(engine.advance_to(10.0), Interrupted);
+  CHECK(engine.observe().counters.steps == 0);
+  CHECK_THROWS_WITH_AS(settle_bed(s, placement, &stop), doctest::Contains("settling"), Interrupted);
 }

@@ -50,30 +50,42 @@ inline Particles spheres(const std::vector<Eigen::Vector3d>& positions, const st
   return p;
 }
 
-/// A single normal impact by the soft law, integrated far more finely than any engine step.
-struct ReferenceImpact {
-  double restitution;  ///< rebound speed over impact speed
-  double contact_time_s;
-};
+/// The 1D Hertz-dashpot contact m* δ'' = −max(0, k δ^{3/2} + c δ'), advanced by RK4.
+/// `kn` in N/m^1.5, `cn` in N·s/m.
+struct HertzDashpotContact {
+  double effective_mass_kg, kn, cn;
+  double delta = 0.0;  ///< overlap (m)
+  double rate = 0.0;   ///< its rate δ' (m/s)
 
-/// The 1D Hertz-dashpot impact m* δ'' = −max(0, k δ^{3/2} + c δ'), from δ = 0 at `speed_m_s`
-/// until the bodies part, integrated with RK4 at `dt_s`. `kn` in N/m^1.5, `cn` in N·s/m.
-inline ReferenceImpact reference_hertz_impact(double effective_mass_kg, double kn, double cn, double speed_m_s,
-                                              double dt_s) {
-  double delta = 0.0, rate = speed_m_s, t = 0.0;
-  auto accel = [&](double d, double r) {
-    return -std::max(0.0, kn * std::pow(std::max(d, 0.0), 1.5) + cn * r) / effective_mass_kg;
-  };
-  do {
+  void step(double dt_s) {
+    auto accel = [&](double d, double r) {
+      return -std::max(0.0, kn * std::pow(std::max(d, 0.0), 1.5) + cn * r) / effective_mass_kg;
+    };
     const double k1d = rate, k1r = accel(delta, rate);
     const double k2d = rate + 0.5 * dt_s * k1r, k2r = accel(delta + 0.5 * dt_s * k1d, k2d);
     const double k3d = rate + 0.5 * dt_s * k2r, k3r = accel(delta + 0.5 * dt_s * k2d, k3d);
     const double k4d = rate + dt_s * k3r, k4r = accel(delta + dt_s * k3d, k4d);
     delta += dt_s / 6 * (k1d + 2 * k2d + 2 * k3d + k4d);
     rate += dt_s / 6 * (k1r + 2 * k2r + 2 * k3r + k4r);
+  }
+};
+
+/// A single normal impact by the soft law, integrated far more finely than any engine step.
+struct ReferenceImpact {
+  double restitution;  ///< rebound speed over impact speed
+  double contact_time_s;
+};
+
+/// The impact from δ = 0 at `speed_m_s` until the bodies part, by RK4 at `dt_s`.
+inline ReferenceImpact reference_hertz_impact(double effective_mass_kg, double kn, double cn, double speed_m_s,
+                                              double dt_s) {
+  HertzDashpotContact contact{effective_mass_kg, kn, cn, 0.0, speed_m_s};
+  double t = 0.0;
+  do {
+    contact.step(dt_s);
     t += dt_s;
-  } while (delta > 0.0);
-  return {-rate / speed_m_s, t};
+  } while (contact.delta > 0.0);
+  return {-contact.rate / speed_m_s, t};
 }
 
 /// A fresh directory under the build tree's temporary folder, removed when destroyed.

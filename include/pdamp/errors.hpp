@@ -22,8 +22,8 @@ class RuntimeFailure : public std::runtime_error {
 
 namespace pdamp {
 
-/// The user asked to stop (SIGINT, SIGTERM) before a run began to compute (e.g. while its bed
-/// settled); the run is stored as interrupted.
+/// The user asked to stop (SIGINT, SIGTERM): thrown where the work is (settling, an
+/// engine's advance_to); the run loop stores the run as interrupted.
 class Interrupted : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

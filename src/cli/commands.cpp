@@ -290,14 +290,17 @@ int delete_runs_command(const std::vector<std::string>& run_id_texts, const std:
 
 int check_command(const ScenarioRequest& request) {
   const Scenario scenario = load_scenario(request.file, request.overrides);
+  // What any run needs (samples, observations, settling); the soft model's own steps below.
+  check_model_can_run(Model::hard, scenario);
   std::cout << "# scenario '" << scenario.name << "' is valid; every key with its resolved value:\n"
             << scenario.canonical_text << "\n";
   if (scenario.particles.count > 0) {
-    const double dt = soft::choose_time_step_s(scenario);
-    std::cout << "# soft engine time step: " << dt << " s (" << (scenario.run.dt_s ? "given" : "automatic")
-              << "); shortest Hertz contact " << soft::shortest_contact_time_s(scenario) << " s at the fastest impact, "
-              << soft::max_impact_speed_m_s(scenario) << " m/s; tangential spring period "
-              << soft::shortest_tangential_period_s(scenario) << " s\n";
+    std::cout << "# soft engine time step: " << soft::describe_time_step(scenario) << "\n";
+    try {
+      check_model_can_run(Model::soft, scenario);
+    } catch (const InputError& e) {
+      std::cout << "# the soft model cannot run it: " << e.what() << "\n";
+    }
   }
   return 0;
 }

@@ -46,7 +46,15 @@ po::options_description scenario_options() {
   po::options_description o("scenario");
   o.add_options()("scenario", po::value<std::string>(), "scenario file (INI syntax; see data/scenarios/)")(
       "set", po::value<std::vector<std::string>>()->composing(),
-      "override a scenario key: --set section.key=value (repeatable)");
+      "override a scenario key: --set section.key=value (repeatable; for a key given twice the last wins)");
+  return o;
+}
+
+/// --duration S: --set run.duration_s=S, in its place among the --set options.
+po::options_description duration_option() {
+  po::options_description o("run");
+  o.add_options()("duration", po::value<std::vector<std::string>>()->composing(),
+                  "simulated time in s (same as --set run.duration_s=S)");
   return o;
 }
 
@@ -56,16 +64,28 @@ po::options_description db_option() {
   return o;
 }
 
-po::variables_map parse(const std::vector<std::string>& args, const po::options_description& options,
-                        const po::positional_options_description& positional = {}) {
+struct CommandLine {
   po::variables_map vm;
+  ScenarioOverrides overrides;  ///< --set and --duration, in the order given
+};
+
+CommandLine parse(const std::vector<std::string>& args, const po::options_description& options,
+                  const po::positional_options_description& positional = {}) {
+  CommandLine line;
   try {
-    po::store(po::command_line_parser(args).options(options).positional(positional).run(), vm);
-    po::notify(vm);
+    const po::parsed_options parsed = po::command_line_parser(args).options(options).positional(positional).run();
+    po::store(parsed, line.vm);
+    po::notify(line.vm);
+    for (const po::option& o : parsed.options) {
+      for (const std::string& value : o.value) {
+        if (o.string_key == "set") line.overrides.push_back(value);
+        if (o.string_key == "duration") line.overrides.push_back("run.duration_s=" + value);
+      }
+    }
   } catch (const po::error& e) {
     throw InputError(std::string(e.what()));
   }
-  return vm;
+  return line;
 }
 
 std::string required(const po::variables_map& vm, const std::string& name, const std::string& command) {
@@ -73,11 +93,8 @@ std::string required(const po::variables_map& vm, const std::string& name, const
   return vm[name].as<std::string>();
 }
 
-ScenarioRequest scenario_request(const po::variables_map& vm, const std::string& command) {
-  ScenarioRequest request;
-  request.file = required(vm, "scenario", command);
-  if (vm.count("set")) request.overrides = vm["set"].as<std::vector<std::string>>();
-  return request;
+ScenarioRequest scenario_request(const CommandLine& line, const std::string& command) {
+  return {required(line.vm, "scenario", command), line.overrides};
 }
 
 int dispatch(const std::string& command, const std::vector<std::string>& args) {
@@ -86,22 +103,21 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
 
   if (command == "run") {
     po::options_description options("pdamp run --scenario FILE --model soft|hard [options]");
-    options.add(help).add(scenario_options()).add(db_option());
+    options.add(help).add(scenario_options()).add(duration_option()).add(db_option());
     options.add_options()("model", po::value<std::string>(), "soft (Hertz DEM) or hard (event-driven)")(
-        "duration", po::value<std::string>(), "simulated time in s (same as --set run.duration_s=S)")(
         "threads", po::value<std::string>(),
         "threads for the soft engine (default: one per core); results are the same bits for any number")(
         "simd", po::value<std::string>(),
         "the soft engine's instruction set, sse2, avx2 or avx512 (default: the widest this CPU runs); results are the "
         "same bits on each");
-    const auto vm = parse(args, options);
+    const CommandLine line = parse(args, options);
+    const po::variables_map& vm = line.vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       describe_scenario_keys(std::cout);
       return 0;
     }
-    ScenarioRequest request = scenario_request(vm, command);
-    if (vm.count("duration")) request.overrides.push_back("run.duration_s=" + vm["duration"].as<std::string>());
+    const ScenarioRequest request = scenario_request(line, command);
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
     if (vm.count("simd"))
       soft::set_default_simd_path(soft::parse_simd_path(vm["simd"].as<std::string>(), "--simd"), "--simd");
@@ -109,23 +125,22 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   }
   if (command == "compare") {
     po::options_description options("pdamp compare --scenario FILE [options]");
-    options.add(help).add(scenario_options()).add(db_option());
-    options.add_options()("duration", po::value<std::string>(), "simulated time in s (same as --set run.duration_s=S)")(
-        "threads", po::value<std::string>(), "threads for the soft engine (default: one per core)");
-    const auto vm = parse(args, options);
+    options.add(help).add(scenario_options()).add(duration_option()).add(db_option());
+    options.add_options()("threads", po::value<std::string>(), "threads for the soft engine (default: one per core)");
+    const CommandLine line = parse(args, options);
+    const po::variables_map& vm = line.vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
     }
-    ScenarioRequest request = scenario_request(vm, command);
-    if (vm.count("duration")) request.overrides.push_back("run.duration_s=" + vm["duration"].as<std::string>());
+    const ScenarioRequest request = scenario_request(line, command);
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
     return compare_command(request, vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0);
   }
   if (command == "runs") {
     po::options_description options("pdamp runs [--db FILE]");
     options.add(help).add(db_option());
-    const auto vm = parse(args, options);
+    const po::variables_map vm = parse(args, options).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
@@ -138,7 +153,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     options.add_options()("run-id", po::value<std::string>(), "run to show");
     po::positional_options_description positional;
     positional.add("run-id", 1);
-    const auto vm = parse(args, options, positional);
+    const po::variables_map vm = parse(args, options, positional).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
@@ -164,12 +179,12 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   if (command == "check") {
     po::options_description options("pdamp check --scenario FILE [--set k=v ...]");
     options.add(help).add(scenario_options());
-    const auto vm = parse(args, options);
-    if (vm.count("help")) {
+    const CommandLine line = parse(args, options);
+    if (line.vm.count("help")) {
       std::cout << options << "\n";
       return 0;
     }
-    return check_command(scenario_request(vm, command));
+    return check_command(scenario_request(line, command));
   }
   if (command == "keys") {
     describe_scenario_keys(std::cout);

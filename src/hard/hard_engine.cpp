@@ -79,7 +79,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       screen_result_(static_cast<int>(initial.size())),
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       max_radius_m_(initial.max_radius_m()),
-      host_(host_model_, 0.0, host_model_.initial_state()) {
+      host_(host_model_, 0.0, host_model_.initial_state()),
+      max_events_(scenario.run.max_events),
+      next_poll_(std::min(poll_interval, max_events_ + 1)) {
   host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
   prefetch_records_ = outgrows_l2_cache(static_cast<std::size_t>(initial.size()) * sizeof(FlightRecord));
   prefetch_cells_ = outgrows_l2_cache(free_cells_.cells_bytes());
@@ -112,6 +114,7 @@ void HardEngine::advance_to(double t_s) {
   for (const Event* next = queue_.top(current); next && next->t_s <= t_s; next = queue_.top(current)) {
     const Event event = *next;
     queue_.pop();
+    if (++events_ >= next_poll_) poll();
     if (!is_current(event)) {
       ++stats_.stale;
       continue;
@@ -137,6 +140,17 @@ void HardEngine::advance_to(double t_s) {
     throw RuntimeFailure(why.str());
   }
 #endif
+}
+
+void HardEngine::poll() {
+  throw_if_stop_requested();
+  if (events_ > max_events_) {
+    std::ostringstream why;
+    why << "the hard engine reached run.max_events = " << max_events_ << " events at t = " << t_s_
+        << " s; raise run.max_events if the run is meant to take more";
+    throw RuntimeFailure(why.str());
+  }
+  next_poll_ = std::min(events_ + poll_interval, max_events_ + 1);
 }
 
 Eigen::Vector3d HardEngine::position_now(int i, const HostState& host) const {

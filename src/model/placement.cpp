@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <numeric>
 #include <random>
@@ -16,31 +17,106 @@
 namespace pdamp {
 namespace {
 
-/// Centres of a hexagonal close-packed lattice of spacing `spacing_m` that keep a sphere
-/// of radius `radius_m` inside the cavity (cavity frame: bottom centre at the origin).
-std::vector<Eigen::Vector3d> lattice_sites(const CavitySettings& cavity, double radius_m, double spacing_m) {
-  std::vector<Eigen::Vector3d> sites;
-  const double reach = cavity.radius_m() - radius_m;  // how far from the axis a centre may be
-  const double layer_gap = spacing_m * std::sqrt(2.0 / 3.0);
-  const double row_gap = spacing_m * std::sqrt(3.0) / 2.0;
-  if (reach < 0) return sites;
-  const int half_rows = static_cast<int>(std::ceil(reach / row_gap)) + 1;
-  const int half_cols = static_cast<int>(std::ceil(reach / spacing_m)) + 1;
-  int layer = 0;
-  for (double z = radius_m; z <= cavity.height_m - radius_m; z = radius_m + (++layer) * layer_gap) {
-    // Alternate layers sit over the hollows of the one below (A, B, A, ... stacking).
-    const double shift_x = (layer % 2) * spacing_m / 2.0, shift_y = (layer % 2) * row_gap / 3.0;
-    for (int row = -half_rows; row <= half_rows; ++row) {
-      const double y = row * row_gap + shift_y;
-      const double row_shift = (std::abs(row) % 2) * spacing_m / 2.0;
-      for (int col = -half_cols; col <= half_cols; ++col) {
-        const double x = col * spacing_m + row_shift + shift_x;
-        if (std::hypot(x, y) <= reach) sites.emplace_back(x, y, z);
+/// The hexagonal close-packed lattice of spacing `spacing_m` whose sites keep a sphere of
+/// radius `radius_m` inside the cavity (cavity frame: bottom centre at the origin): layers
+/// from z = radius_m up, each a triangular lattice of rows along x, alternate layers over
+/// the hollows of the one below (A, B, A, ... stacking). A row's sites inside the cavity are
+/// a run of consecutive columns, found without visiting the others, and layers of one
+/// parity have the same sites: the lattice is counted in time and memory that do not grow
+/// with the cavity, and listed in time proportional to its sites.
+class HcpLattice {
+ public:
+  HcpLattice(const CavitySettings& cavity, double radius_m, double spacing_m)
+      : radius_m_(radius_m),
+        spacing_m_(spacing_m),
+        reach_m_(cavity.radius_m() - radius_m),
+        top_m_(cavity.height_m - radius_m),
+        layer_gap_m_(spacing_m * std::sqrt(2.0 / 3.0)),
+        row_gap_m_(spacing_m * std::sqrt(3.0) / 2.0),
+        half_rows_(std::ceil(reach_m_ / row_gap_m_) + 1.0),
+        half_cols_(std::ceil(reach_m_ / spacing_m) + 1.0),
+        layers_(reach_m_ < 0.0 ? 0.0 : layer_count()) {}
+
+  /// The number of sites, or `cap` if there are more.
+  std::int64_t count(std::int64_t cap) const {
+    const double by_parity[2] = {std::ceil(0.5 * layers_), std::floor(0.5 * layers_)};
+    double total = 0.0;
+    for (const int parity : {0, 1}) {
+      if (by_parity[parity] == 0.0) continue;
+      total += by_parity[parity] * static_cast<double>(count_layer(parity, cap));
+      if (total >= static_cast<double>(cap)) return cap;
+    }
+    return static_cast<std::int64_t>(total);
+  }
+
+  std::vector<Eigen::Vector3d> sites() const {
+    std::vector<Eigen::Vector3d> sites;
+    for (double layer = 0.0; layer < layers_; ++layer) {
+      const int parity = static_cast<int>(std::fmod(layer, 2.0));
+      const double z = layer_z_m(layer);
+      for (double row = -half_rows_; row <= half_rows_; ++row) {
+        const Row r = row_sites(row, parity);
+        for (double col = r.first; col <= r.last; ++col) sites.emplace_back(x_m(col, r), r.y_m, z);
       }
     }
+    return sites;
   }
-  return sites;
-}
+
+ private:
+  /// A row of a layer: its y, its shift and its layer's in x, and its sites' columns [first, last].
+  struct Row {
+    double y_m, row_shift_m, layer_shift_m, first, last;
+  };
+
+  double layer_z_m(double layer) const { return radius_m_ + layer * layer_gap_m_; }
+  double x_m(double col, const Row& r) const { return col * spacing_m_ + r.row_shift_m + r.layer_shift_m; }
+  bool inside(double col, const Row& r) const { return std::hypot(x_m(col, r), r.y_m) <= reach_m_; }
+
+  double layer_count() const {
+    double layers = std::floor((top_m_ - radius_m_) / layer_gap_m_) + 1.0;
+    if (!(layers < 0x1p52)) return layers;  // beyond where doubles count in ones, exact is moot
+    layers = std::max(layers, 0.0);
+    while (layer_z_m(layers) <= top_m_) ++layers;
+    while (layers > 0.0 && !(layer_z_m(layers - 1.0) <= top_m_)) --layers;
+    return layers;
+  }
+
+  Row row_sites(double row, int parity) const {
+    Row r;
+    // Shifts as the lattice was first written: alternate layers by half a spacing in x and
+    // a third of a row gap in y, odd rows by half a spacing.
+    r.y_m = row * row_gap_m_ + parity * row_gap_m_ / 3.0;
+    r.row_shift_m = std::fmod(std::abs(row), 2.0) * spacing_m_ / 2.0;
+    r.layer_shift_m = parity * spacing_m_ / 2.0;
+    const double chord = std::sqrt(std::max(0.0, reach_m_ * reach_m_ - r.y_m * r.y_m));
+    const double shift = r.row_shift_m + r.layer_shift_m;
+    r.first = std::max(-half_cols_, std::ceil((-chord - shift) / spacing_m_));
+    r.last = std::min(half_cols_, std::floor((chord - shift) / spacing_m_));
+    // The estimate is within a column or two of the sites the exact test admits.
+    if (r.last - r.first < 0x1p52) {
+      while (r.first > -half_cols_ && inside(r.first - 1.0, r)) --r.first;
+      while (r.first <= r.last && !inside(r.first, r)) ++r.first;
+      while (r.last < half_cols_ && inside(r.last + 1.0, r)) ++r.last;
+      while (r.last >= r.first && !inside(r.last, r)) --r.last;
+    }
+    return r;
+  }
+
+  /// The sites of one layer of this parity, or `cap` if there are more; rows from the
+  /// middle out, so that a wide cavity reaches the cap in its first rows.
+  std::int64_t count_layer(int parity, std::int64_t cap) const {
+    double total = 0.0;
+    for (double k = 0.0; k <= 2.0 * half_rows_ && total < static_cast<double>(cap); ++k) {
+      const double row = std::fmod(k, 2.0) == 0.0 ? -0.5 * k : 0.5 * (k + 1.0);  // 0, 1, -1, 2, -2, ...
+      const Row r = row_sites(row, parity);
+      total += std::max(0.0, r.last - r.first + 1.0);
+    }
+    return total >= static_cast<double>(cap) ? cap : static_cast<std::int64_t>(total);
+  }
+
+  double radius_m_, spacing_m_, reach_m_, top_m_, layer_gap_m_, row_gap_m_;
+  double half_rows_, half_cols_, layers_;
+};
 
 /// A point in the unit ball, uniformly.
 Eigen::Vector3d random_in_ball(std::mt19937_64& rng) {
@@ -75,7 +151,7 @@ double padded_radius(const CavitySettings& cavity, double radius_m) {
 
 int max_particles_that_fit(const CavitySettings& cavity, double diameter_m) {
   const double r = padded_radius(cavity, diameter_m / 2.0);
-  return static_cast<int>(lattice_sites(cavity, r, 2.0 * r).size());
+  return static_cast<int>(HcpLattice(cavity, r, 2.0 * r).count(max_particle_count));
 }
 
 double solid_fraction(const CavitySettings& cavity, const Particles& particles) {
@@ -106,10 +182,10 @@ Particles place_particles(const ParticleSettings& settings, const CavitySettings
   double tight = 2.0 * r_max, loose = std::max(2.0 * cavity.radius_m(), cavity.height_m);
   for (int iteration = 0; iteration < 60; ++iteration) {
     const double mid = 0.5 * (tight + loose);
-    (static_cast<int>(lattice_sites(cavity, r_max, mid).size()) >= n ? tight : loose) = mid;
+    (HcpLattice(cavity, r_max, mid).count(n) >= n ? tight : loose) = mid;
   }
   const double spacing = tight;
-  std::vector<Eigen::Vector3d> sites = lattice_sites(cavity, r_max, spacing);
+  std::vector<Eigen::Vector3d> sites = HcpLattice(cavity, r_max, spacing).sites();
 
   std::mt19937_64 rng(settings.seed);
   std::shuffle(sites.begin(), sites.end(), rng);

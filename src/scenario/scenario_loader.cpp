@@ -1,21 +1,26 @@
 #include "pdamp/scenario/scenario_loader.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
-#include <boost/program_options.hpp>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <fstream>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
 #include <ostream>
+#include <set>
 #include <sstream>
+#include <string_view>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/model/cell_grid.hpp"
 #include "pdamp/model/placement.hpp"
-
-namespace po = boost::program_options;
 
 namespace pdamp {
 
@@ -27,11 +32,33 @@ namespace {
 struct Value {
   std::string key;
   std::string text;
-  std::string origin;  ///< "file.ini" or "--set"
+  std::string origin;  ///< "file.ini, line 3", "--set host.z0_m" or "default"
 };
 
+/// Text for a message, with every byte outside printable ASCII written \xNN: nothing in
+/// it is invisible (a byte-order mark, a zero-width space, a control character).
+std::string printable(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (byte >= 0x20 && byte < 0x7f) {
+      out += c;
+    } else {
+      constexpr const char* hex = "0123456789abcdef";
+      out += {'\\', 'x', hex[byte >> 4], hex[byte & 15]};
+    }
+  }
+  return out;
+}
+
 [[noreturn]] void reject(const Value& v, const std::string& why) {
-  throw InputError(v.origin + ": " + v.key + " = '" + v.text + "': " + why);
+  throw InputError(v.origin + ": " + v.key + " = '" + printable(v.text) + "': " + why);
+}
+
+/// For a problem of two values together.
+[[noreturn]] void reject(const Value& a, const Value& b, const std::string& why) {
+  throw InputError(a.origin + ": " + a.key + " = '" + printable(a.text) + "' and " + b.key + " = '" +
+                   printable(b.text) + "'" + (b.origin == a.origin ? "" : " (" + b.origin + ")") + ": " + why);
 }
 
 std::vector<std::string> split_words(const std::string& text) {
@@ -46,7 +73,7 @@ double parse_number(const Value& v, const std::string& word) {
   const char* end = word.data() + word.size();
   auto [ptr, ec] = std::from_chars(word.data(), end, x);
   if (ec != std::errc() || ptr != end || !std::isfinite(x)) {
-    reject(v, "'" + word + "' is not a finite number (write e.g. 0.0157 or 1.5e-3)");
+    reject(v, "'" + printable(word) + "' is not a finite number (write e.g. 0.0157 or 1.5e-3)");
   }
   return x;
 }
@@ -86,6 +113,22 @@ struct KeySpec {
   Apply apply;
   std::string inherits;
 };
+
+/// A whole number from `min` to `max`, written as digits or in exponent notation (1e9).
+std::int64_t parse_whole(const Value& v, std::int64_t min, std::int64_t max) {
+  const double x = parse_in_range(v, any_number);
+  if (x != std::floor(x) || x < static_cast<double>(min) || x > static_cast<double>(max)) {
+    reject(v, "must be a whole number from " + std::to_string(min) + " to " + std::to_string(max));
+  }
+  return static_cast<std::int64_t>(x);
+}
+
+/// The largest bound a run's work may be given: 2^53, where doubles still count in ones.
+constexpr std::int64_t max_work_limit = std::int64_t{1} << 53;
+
+Apply whole(std::int64_t RunSettings::*field, std::int64_t max) {
+  return [field, max](Scenario& s, const Value& v) { s.run.*field = parse_whole(v, 1, max); };
+}
 
 Apply number(double& (*field)(Scenario&), Range range) {
   return [field, range](Scenario& s, const Value& v) { field(s) = parse_in_range(v, range); };
@@ -198,9 +241,7 @@ const std::vector<KeySpec>& key_specs() {
          ""},
         {"particles.count", "1246", "", "number of spheres n (0 runs the host alone)",
          [](Scenario& s, const Value& v) {
-           const double n = parse_in_range(v, non_negative);
-           if (n != std::floor(n) || n > 10'000'000) reject(v, "must be a whole number from 0 to 10000000");
-           s.particles.count = static_cast<int>(n);
+           s.particles.count = static_cast<int>(parse_whole(v, 0, max_particle_count));
          },
          ""},
         {"particles.diameter_m", "0.00088", "m", "sphere diameter d, or 'dmin dmax' for diameters uniform in a range",
@@ -244,6 +285,14 @@ const std::vector<KeySpec>& key_specs() {
            s.run.dt_s = parse_in_range(v, time_step);
          },
          ""},
+        {"run.max_steps", "1e9", "",
+         "the most steps a run may take: the soft engine's time steps (the run's, and settling's up to its 5 s "
+         "limit) and the run loop's observations (either model); a scenario that needs more is refused",
+         whole(&RunSettings::max_steps, max_work_limit), ""},
+        {"run.max_samples", "1e6", "", "the most samples a run may store; a scenario that needs more is refused",
+         whole(&RunSettings::max_samples, max_work_limit), ""},
+        {"run.max_events", "1e10", "", "the most events the hard engine may handle; a run that reaches it fails",
+         whole(&RunSettings::max_events, max_work_limit), ""},
     };
     for (auto& spec : soft_law_keys("soft", &Scenario::soft_particle, "")) k.push_back(spec);
     for (auto& spec : soft_law_keys("soft_wall", &Scenario::soft_wall, "soft")) k.push_back(spec);
@@ -281,49 +330,112 @@ struct RawScenario {
   std::map<std::string, Value> given;
 };
 
-po::options_description options_for_parsing() {
-  po::options_description desc;
-  for (const auto& spec : key_specs()) desc.add_options()(spec.key.c_str(), po::value<std::string>());
-  return desc;
+const KeySpec* find_key(std::string_view key) {
+  const auto it = std::find_if(key_specs().begin(), key_specs().end(), [&](const KeySpec& k) { return k.key == key; });
+  return it == key_specs().end() ? nullptr : &*it;
 }
 
-void parse_into(RawScenario& raw, std::istream& in, const std::string& origin) {
-  po::variables_map vm;
-  try {
-    po::store(po::parse_config_file(in, options_for_parsing(), /*allow_unregistered=*/false), vm);
-  } catch (const po::unknown_option& e) {
-    throw InputError(origin + ": unknown key '" + e.get_option_name() +
-                     "' (run 'pdamp keys' for the list of valid keys)");
-  } catch (const po::multiple_occurrences& e) {
-    throw InputError(origin + ": key '" + e.get_option_name() + "' is given more than once");
-  } catch (const po::error& e) {
-    throw InputError(origin + ": " + e.what() + " (expected 'key = value' lines under [section] headers)");
-  }
-  for (const auto& [key, value] : vm) {
-    // Overrides are parsed first and win over the file.
-    raw.given.try_emplace(key, Value{key, value.as<std::string>(), origin});
+void require_known_key(const std::string& key, const std::string& where) {
+  if (!find_key(key)) {
+    throw InputError(where + ": unknown key '" + printable(key) + "' (run 'pdamp keys' for the list of valid keys)");
   }
 }
 
+bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
+std::string_view trim(std::string_view text) {
+  while (!text.empty() && is_blank(text.front())) text.remove_prefix(1);
+  while (!text.empty() && is_blank(text.back())) text.remove_suffix(1);
+  return text;
+}
+
+const std::string no_hash_in_values =
+    "a value cannot contain '#': in scenario syntax '#' starts a comment, and the scenario the store keeps must "
+    "read back the same";
+
+/// A line without its comment. A '#' starts a comment at the start of a line or after a
+/// space or tab; anywhere else it is refused, never silently cut.
+std::string_view strip_comment(std::string_view line, const std::string& where) {
+  const auto hash = line.find('#');
+  if (hash == std::string_view::npos) return line;
+  if (hash > 0 && !is_blank(line[hash - 1])) {
+    throw InputError(where + ": '" + printable(line) + "': '#' directly after text; " + no_hash_in_values +
+                     " (a comment starts with '#' after a space)");
+  }
+  return line.substr(0, hash);
+}
+
+/// Scenario-file syntax: `[section]` headers, `key = value` lines (the key is
+/// section.key under a header, or written in full before any), `#` comments, blank lines.
+/// A UTF-8 byte-order mark at the start is skipped. Keys the file repeats are refused.
+void parse_file_text(RawScenario& raw, std::string_view text, const std::string& origin) {
+  constexpr std::string_view byte_order_mark = "\xEF\xBB\xBF";
+  if (text.starts_with(byte_order_mark)) text.remove_prefix(byte_order_mark.size());
+  if (const auto nul = text.find('\0'); nul != std::string_view::npos) {
+    throw InputError(origin + ": a NUL byte at offset " + std::to_string(nul) + ": a scenario file is text");
+  }
+  std::string section;
+  std::set<std::string> seen;
+  int number = 0;
+  for (std::size_t start = 0; start < text.size();) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    std::string_view line = text.substr(start, end - start);
+    start = end + 1;
+    ++number;
+    if (line.ends_with('\r')) line.remove_suffix(1);
+    const std::string where = origin + ", line " + std::to_string(number);
+    line = trim(strip_comment(line, where));
+    if (line.empty()) continue;
+    if (line.front() == '[' && line.back() == ']') {
+      section = std::string(trim(line.substr(1, line.size() - 2)));
+      continue;
+    }
+    const auto eq = line.find('=');
+    if (eq == std::string_view::npos) {
+      throw InputError(where + ": '" + printable(line) +
+                       "' is not a 'key = value' line, a [section] header or a '#' comment");
+    }
+    const std::string name(trim(line.substr(0, eq)));
+    const std::string key = section.empty() ? name : section + "." + name;
+    require_known_key(key, where);
+    if (!seen.insert(key).second) throw InputError(where + ": key '" + key + "' is given more than once");
+    // The command line's overrides are parsed first and win over the file.
+    raw.given.try_emplace(key, Value{key, std::string(trim(line.substr(eq + 1))), where});
+  }
+}
+
+/// `--set section.key=value`, each one line; a key set again replaces the earlier value
+/// (the last on the command line wins).
 void parse_overrides(RawScenario& raw, const ScenarioOverrides& overrides) {
   for (const auto& item : overrides) {
+    const std::string where = "--set '" + printable(item) + "'";
+    if (item.find_first_of(std::string_view("\n\r\0", 3)) != std::string::npos) {
+      throw InputError(where + ": a --set is one section.key=value, without line breaks; give each key its own --set");
+    }
     const auto eq = item.find('=');
     const auto dot = item.find('.');
     if (eq == std::string::npos || dot == std::string::npos || dot > eq) {
-      throw InputError("--set '" + item + "': expected section.key=value, e.g. --set host.z0_m=0.01");
+      throw InputError(where + ": expected section.key=value, e.g. --set host.z0_m=0.01");
     }
-    std::istringstream line(item + "\n");
-    parse_into(raw, line, "--set " + item.substr(0, eq));
+    const std::string key(trim(std::string_view(item).substr(0, eq)));
+    require_known_key(key, "--set " + printable(key));
+    const std::string value(trim(std::string_view(item).substr(eq + 1)));
+    if (value.find('#') != std::string::npos) throw InputError(where + ": " + no_hash_in_values);
+    raw.given.insert_or_assign(key, Value{key, value, "--set " + key});
   }
+}
+
+/// The value of `key` as given, or its default.
+Value value_of(const RawScenario& raw, const std::string& key) {
+  const auto it = raw.given.find(key);
+  return it != raw.given.end() ? it->second : Value{key, find_key(key)->default_text, "default"};
 }
 
 /// True if a numeric key was given a value other than its default.
 bool differs_from_default(const RawScenario& raw, const std::string& key) {
   const auto it = raw.given.find(key);
   if (it == raw.given.end()) return false;
-  const auto spec =
-      std::find_if(key_specs().begin(), key_specs().end(), [&](const KeySpec& k) { return k.key == key; });
-  return parse_number(it->second, it->second.text) != parse_number(it->second, spec->default_text);
+  return parse_number(it->second, it->second.text) != parse_number(it->second, find_key(key)->default_text);
 }
 
 /// Keys that the chosen excitation mode ignores must keep their defaults: a value that
@@ -334,9 +446,7 @@ void check_excitation(const Scenario& s, const RawScenario& raw) {
     if (differs_from_default(raw, key)) reject(raw.given.at(key), why);
   };
   auto require_positive = [&](const std::string& key, double value, const std::string& why) {
-    if (value > 0) return;
-    const auto it = raw.given.find(key);
-    reject(it != raw.given.end() ? it->second : Value{key, "0", "default"}, why);
+    if (value <= 0) reject(value_of(raw, key), why);
   };
   const std::string mode = raw.given.contains("excitation.mode") ? raw.given.at("excitation.mode").text : "free";
   const std::string in_mode = " is not used by excitation.mode = " + mode;
@@ -375,11 +485,7 @@ void check_excitation(const Scenario& s, const RawScenario& raw) {
 
 void check_particles(const Scenario& s, const RawScenario& raw) {
   if (s.particles.count == 0) return;
-  auto value_of = [&](const std::string& key, const std::string& fallback) {
-    const auto it = raw.given.find(key);
-    return it != raw.given.end() ? it->second : Value{key, fallback, "default"};
-  };
-  const Value diameter = value_of("particles.diameter_m", "0.00088");
+  const Value diameter = value_of(raw, "particles.diameter_m");
   const double d = s.particles.diameter_max_m;
   if (d >= s.cavity.diameter_m || d >= s.cavity.height_m) {
     std::ostringstream why;
@@ -387,20 +493,41 @@ void check_particles(const Scenario& s, const RawScenario& raw) {
         << " m, H = " << s.cavity.height_m << " m); the diameter must be smaller than both";
     reject(diameter, why.str());
   }
+  for (const double diameter_m : {s.particles.diameter_min_m, s.particles.diameter_max_m}) {
+    // As the placement computes them; the engines divide by both.
+    const double mass_kg = s.particles.density_kg_m3 * std::numbers::pi / 6.0 * diameter_m * diameter_m * diameter_m;
+    const double inertia_kg_m2 = 0.1 * mass_kg * diameter_m * diameter_m;
+    if (!std::isnormal(mass_kg) || !std::isnormal(1.0 / mass_kg) || !std::isnormal(inertia_kg_m2) ||
+        !std::isnormal(1.0 / inertia_kg_m2)) {
+      std::ostringstream why;
+      why << "spheres of diameter " << diameter_m << " m would have a mass of " << mass_kg
+          << " kg and a moment of inertia of " << inertia_kg_m2
+          << " kg m^2, beyond what double precision holds with their inverses";
+      reject(value_of(raw, "particles.density_kg_m3"), why.str());
+    }
+  }
+  // Every engine's cells are at least as large as the largest sphere: this many at most.
+  if (const double cells = CellGrid::cell_count(s.cavity.radius_m(), s.cavity.height_m, d);
+      cells > CellGrid::max_cells) {
+    std::ostringstream why;
+    why << "the engines find contacts on a grid of cells as large as the largest sphere (" << d
+        << " m); this cavity (D = " << s.cavity.diameter_m << " m, H = " << s.cavity.height_m << " m) would need "
+        << cells << " of them, more than the " << CellGrid::max_cells
+        << " they may have: a smaller cavity or larger spheres";
+    reject(value_of(raw, "cavity.diameter_m"), value_of(raw, "cavity.height_m"), why.str());
+  }
   const int capacity = max_particles_that_fit(s.cavity, d);
   if (s.particles.count > capacity) {
     std::ostringstream why;
     why << "at most " << capacity << " spheres of diameter " << d
         << " m can be placed in this cavity (D = " << s.cavity.diameter_m << " m, H = " << s.cavity.height_m << " m)";
-    reject(value_of("particles.count", "1246"), why.str());
+    reject(value_of(raw, "particles.count"), why.str());
   }
 }
 
 void check_run(const Scenario& s, const RawScenario& raw) {
   if (s.run.sample_interval_s > s.run.duration_s) {
-    const auto it = raw.given.find("run.sample_interval_s");
-    reject(it != raw.given.end() ? it->second : Value{"run.sample_interval_s", "0.001", "default"},
-           "must not exceed run.duration_s");
+    reject(value_of(raw, "run.sample_interval_s"), "must not exceed run.duration_s");
   }
 }
 
@@ -443,34 +570,67 @@ Scenario build(const RawScenario& raw, const std::string& default_name) {
   return s;
 }
 
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  return text.substr(first, text.find_last_not_of(" \t\r\n") - first + 1);
-}
-
 }  // namespace
 
 Scenario parse_scenario(const std::string& text, const std::string& name, const std::string& origin,
                         const ScenarioOverrides& overrides) {
   RawScenario raw;
   parse_overrides(raw, overrides);
-  std::istringstream in(text);
-  parse_into(raw, in, origin);
-  for (auto& [key, value] : raw.given) value.text = trim(value.text);
+  parse_file_text(raw, text, origin);
   return build(raw, name);
 }
 
-Scenario load_scenario(const std::filesystem::path& file, const ScenarioOverrides& overrides) {
-  std::ifstream in(file);
-  if (!in) {
-    throw InputError("scenario file '" + file.string() + "' cannot be read (" +
-                     (std::filesystem::exists(file) ? "permission denied" : "no such file") +
-                     "); the paper's cases are in data/scenarios/");
+namespace {
+
+/// Closes a file descriptor when it goes out of scope.
+struct OpenFile {
+  int fd;
+  ~OpenFile() {
+    if (fd >= 0) ::close(fd);
   }
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_scenario(text.str(), file.stem().string(), file.string(), overrides);
+};
+
+/// The whole of a scenario file: a regular file of at most max_scenario_file_bytes. Opened
+/// without blocking, so that a FIFO cannot hang the reader, and checked as opened, so that
+/// nothing can be swapped in between.
+std::string read_scenario_file(const std::filesystem::path& file) {
+  const std::string name = "scenario file '" + printable(file.string()) + "'";
+  const OpenFile in{::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC)};
+  auto cannot_read = [&](int error) {
+    return InputError(name + " cannot be read (" +
+                      (error == ENOENT   ? "no such file"
+                       : error == EACCES ? "permission denied"
+                                         : std::strerror(error)) +
+                      "); the paper's cases are in data/scenarios/");
+  };
+  struct stat status {};
+  if (in.fd < 0 || ::fstat(in.fd, &status) != 0) throw cannot_read(errno);
+  if (!S_ISREG(status.st_mode)) {
+    const char* kind = S_ISDIR(status.st_mode)    ? "a directory"
+                       : S_ISFIFO(status.st_mode) ? "a FIFO"
+                       : S_ISSOCK(status.st_mode) ? "a socket"
+                                                  : "a device";
+    throw InputError(name + " is " + kind + ", not a regular file");
+  }
+  std::string text;
+  char buffer[1 << 16];
+  for (;;) {
+    const ssize_t got = ::read(in.fd, buffer, sizeof buffer);
+    if (got < 0 && errno == EINTR) continue;
+    if (got < 0) throw cannot_read(errno);
+    if (got == 0) return text;
+    text.append(buffer, static_cast<std::size_t>(got));
+    if (text.size() > max_scenario_file_bytes) {
+      throw InputError(name + " is larger than " + std::to_string(max_scenario_file_bytes) +
+                       " bytes, the most a scenario file may have");
+    }
+  }
+}
+
+}  // namespace
+
+Scenario load_scenario(const std::filesystem::path& file, const ScenarioOverrides& overrides) {
+  return parse_scenario(read_scenario_file(file), file.stem().string(), file.string(), overrides);
 }
 
 void describe_scenario_keys(std::ostream& out) {

@@ -3,9 +3,8 @@
 #include "pdamp/errors.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/host_only_engine.hpp"
-#include "pdamp/model/placement.hpp"
+#include "pdamp/sim/run_budget.hpp"
 #include "pdamp/soft/soft_engine.hpp"
-#include "pdamp/soft/time_step.hpp"
 
 namespace pdamp {
 
@@ -19,11 +18,8 @@ Model parse_model(std::string_view text) {
 }
 
 void check_model_can_run(Model model, const Scenario& scenario) {
-  if (scenario.particles.count == 0) return;
-  check_particles_fit(scenario.particles, scenario.cavity);
   // The soft engine settles every bed, so its time step must work for either model.
-  (void)model;
-  soft::choose_time_step_s(scenario);
+  check_run_budget(model, scenario);
 }
 
 std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial,

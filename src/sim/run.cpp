@@ -5,8 +5,10 @@
 #include <cmath>
 #include <exception>
 #include <numbers>
+#include <sstream>
 
 #include "pdamp/analysis/cycle_analyzer.hpp"
+#include "pdamp/errors.hpp"
 
 namespace pdamp {
 
@@ -25,6 +27,22 @@ CycleAnalyzer make_cycle_analyzer(const Scenario& scenario, const Particles& bed
   return CycleAnalyzer(scenario.host.mass_kg, equilibrium_z, std::abs(g_z));
 }
 
+namespace {
+
+/// Ends the run as failed if the engine's state is no longer finite: either engine's
+/// particles enter the energies, and the host its position and speed.
+void require_finite(const Observation& o) {
+  const EnergyLedger& e = o.energy;
+  const double values[] = {o.host.z_m, o.host.v_m_s, e.stored_J(), e.dissipated_J(), e.excitation_work_J};
+  if (std::all_of(std::begin(values), std::end(values), [](double x) { return std::isfinite(x); })) return;
+  std::ostringstream why;
+  why << "the state stopped being finite at t = " << o.t_s << " s (host at " << o.host.z_m << " m, " << o.host.v_m_s
+      << " m/s; stored energy " << e.stored_J() << " J, dissipated " << e.dissipated_J() << " J)";
+  throw RuntimeFailure(why.str());
+}
+
+}  // namespace
+
 RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder, const RunControl& control) {
   using clock = std::chrono::steady_clock;
   const auto wall_start = clock::now();
@@ -38,9 +56,15 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
       static_cast<long>(std::ceil(sample_interval / observation_interval_s(scenario) - 1e-9));
   const double h = sample_interval / static_cast<double>(observations_per_sample);
 
+  auto interrupted = [&] {
+    outcome.status = RunStatus::interrupted;
+    outcome.message = "stopped by a signal at t = " + std::to_string(outcome.sim_time_s) + " s";
+  };
+  engine.set_stop_request(control.stop);
   try {
     CycleAnalyzer cycles = make_cycle_analyzer(scenario, engine.state().particles);
     Observation now = engine.observe();
+    require_finite(now);
     outcome.initial_energy_J = now.energy.stored_J();
     auto record = [&](bool is_sample) {
       const double error = now.energy.balance_relative_error(outcome.initial_energy_J);
@@ -64,10 +88,10 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
         const double target = std::min(t, duration);
         engine.advance_to(target);
         now = engine.observe();
+        require_finite(now);
         record(j == observations_per_sample || target == duration);
         if (control.stop && control.stop->load()) {
-          outcome.status = RunStatus::interrupted;
-          outcome.message = "stopped by a signal at t = " + std::to_string(now.t_s) + " s";
+          interrupted();
           break;
         }
         if (control.progress && clock::now() >= next_progress) {
@@ -77,6 +101,8 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
       }
       if (outcome.status == RunStatus::interrupted) break;
     }
+  } catch (const Interrupted&) {
+    interrupted();  // inside the engine: the last observation stands
   } catch (const std::exception& e) {
     outcome.status = RunStatus::failed;
     outcome.message = e.what();

@@ -23,14 +23,18 @@ SettledBed settle_bed(const Scenario& scenario, const Particles& placement, cons
   options.hold_host = true;
   options.settling_drag_1_s = 1.0 / fall_time_s;
   SoftEngine engine(scenario, placement, options);
+  engine.set_stop_request(stop);
   for (double t = settling_check_interval_s;; t += settling_check_interval_s) {
-    engine.advance_to(t);
+    try {
+      engine.advance_to(t);
+    } catch (const Interrupted&) {
+      throw Interrupted("stopped while settling the bed");
+    }
     const double kinetic = engine.particle_kinetic_J();
     if (progress) progress(t, kinetic);
     if (t >= fall_time_s && kinetic < threshold_J) {
       return {engine.state().particles, t, kinetic, engine.observe().counters.steps};
     }
-    if (stop && stop->load()) throw Interrupted("stopped while settling the bed");
     if (t >= settling_time_limit_s) {
       std::ostringstream msg;
       msg << "the bed did not come to rest in " << settling_time_limit_s << " s of settling: its kinetic energy is "

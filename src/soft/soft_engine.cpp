@@ -182,6 +182,7 @@ void SoftEngine::advance_to(double t_s) {
   // fused into one pass; between calls the velocities are at full steps.
   double owed_kick_s = 0.0;
   while (t_s_ < t_s) {
+    throw_if_stop_requested();
     const double dt = next_step_s(t_s);
     move(owed_kick_s + 0.5 * dt, dt);
     refresh_neighbours();
@@ -201,10 +202,22 @@ double SoftEngine::next_step_s(double t_s) {
   return remaining;
 }
 
+void SoftEngine::check_state_finite() const {
+  for (int i = 0; i < sphere_count(); ++i) {
+    if (balls_.vector(i).allFinite() && std::isfinite(host_.z_m)) continue;
+    std::ostringstream msg;
+    msg << "the soft engine's state stopped being finite at t = " << t_s_ << " s (particle " << original_index_[i]
+        << " at " << balls_.vector(i).transpose() << " m, the host at " << host_.z_m << " m): the integration "
+        << "diverged; its time step " << dt_s_ << " s is too long for the forces of this scenario";
+    throw RuntimeFailure(msg.str());
+  }
+}
+
 void SoftEngine::check_particles_inside() const {
+  check_state_finite();
   for (int i = 0; i < sphere_count(); ++i) {
     const Eigen::Vector3d x = balls_.vector(i);
-    if (!x.allFinite() || cavity_.clearance_m(x, balls_[i].radius, host_.z_m) < -balls_[i].radius) {
+    if (cavity_.clearance_m(x, balls_[i].radius, host_.z_m) < -balls_[i].radius) {
       std::ostringstream msg;
       msg << "particle " << original_index_[i] << " left the cavity at t = " << t_s_ << " s (position " << x.transpose()
           << " m): a contact let it through. Contacts overlapped up to " << 100.0 * max_overlap_ratio_
@@ -282,8 +295,9 @@ bool SoftEngine::drift_chunk(int c, double kick_s, double dt_s) {
     const R new_x = ball.a + new_vx * dt_s, new_y = ball.b + new_vy * dt_s, new_z = ball.c + new_vz * dt_s;
     store_records<R>({new_x, new_y, new_z, ball.d}, record(balls));
     const R dx = new_x - load<R>(x0 + s), dy = new_y - load<R>(y0 + s), dz = new_z - load<R>(z0 + s) - host_shift;
-    const auto beyond = dx * dx + dy * dy + dz * dz > limit_sq;
-    beyond_skin |= lane_bits(beyond) != 0;
+    const R moved_sq = dx * dx + dy * dy + dz * dz;
+    // A position that is not a number asks for a rebuild too, which stops the run (check_state_finite).
+    beyond_skin |= (lane_bits(moved_sq > limit_sq) | lane_bits(moved_sq != moved_sq)) != 0;
   };
   for_each_register<Real>(first, end, drift);
   return beyond_skin;
@@ -296,6 +310,7 @@ void SoftEngine::refresh_neighbours() {
   // (which holds old and new contact tables at once) before the next force computation
   // takes it back.
   for (std::vector<Reaction>& chunk_reactions : reactions_) std::vector<Reaction>().swap(chunk_reactions);
+  check_state_finite();  // the cells are found from the positions
   const std::vector<int>& order = neighbours_.sort_by_cell(balls_);
   set_aside_open_contacts(order);
   reorder_spheres(order);

@@ -51,22 +51,85 @@ double shortest_contact_time_s(const Scenario& scenario) {
                   hertz_contact_time_s(lightest_kg, scenario.soft_wall.kn_N_m1_5, speed));
 }
 
+Relaxation shortest_relaxation(const Scenario& scenario) {
+  Relaxation shortest{std::numeric_limits<double>::infinity(), "no dashpot"};
+  auto consider = [&](double mass_kg, double damping_N_s_m, const std::string& what) {
+    if (damping_N_s_m > 0.0 && mass_kg / damping_N_s_m < shortest.time_s) shortest = {mass_kg / damping_N_s_m, what};
+  };
+  const double m = lightest_sphere_kg(scenario);
+  consider(0.5 * m, scenario.soft_particle.cn_N_s_m, "the sphere-sphere normal dashpot soft.cn_N_s_m");
+  consider(m, scenario.soft_wall.cn_N_s_m, "the sphere-wall normal dashpot soft_wall.cn_N_s_m");
+  consider(m / 7.0, scenario.soft_particle.cs_N_s_m, "the sphere-sphere tangential dashpot soft.cs_N_s_m");
+  consider(2.0 * m / 7.0, scenario.soft_wall.cs_N_s_m, "the sphere-wall tangential dashpot soft_wall.cs_N_s_m");
+  if (!scenario.host_has_infinite_mass()) {
+    consider(scenario.host.mass_kg, scenario.host.damping_N_s_m, "the host's damper host.damping_N_s_m");
+  }
+  if (const double g = scenario.gravity_m_s2.norm(); g > 0.0) {
+    // The settling drag −m v / t_fall (settling.hpp).
+    consider(std::sqrt(2.0 * scenario.cavity.height_m / g), 1.0,
+             "the settling drag (1/t_fall, from cavity.height_m and gravity.g_m_s2)");
+  }
+  return shortest;
+}
+
+namespace {
+
+/// The three criteria and the step each allows, automatic and at most.
+struct Criteria {
+  double contact_s, tangential_s;
+  Relaxation relaxation;
+  explicit Criteria(const Scenario& scenario)
+      : contact_s(shortest_contact_time_s(scenario)),
+        tangential_s(shortest_tangential_period_s(scenario)),
+        relaxation(shortest_relaxation(scenario)) {}
+  double automatic_s() const {
+    return std::min(std::min(contact_s / steps_per_contact_auto, tangential_s / steps_per_tangential_period_auto),
+                    relaxation.time_s / steps_per_relaxation_auto);
+  }
+  double limit_s() const {
+    return std::min({contact_s / steps_per_contact_minimum, tangential_s / steps_per_tangential_period_minimum,
+                     relaxation.time_s / steps_per_relaxation_minimum});
+  }
+};
+
+}  // namespace
+
 double choose_time_step_s(const Scenario& scenario) {
-  const double contact = shortest_contact_time_s(scenario);
-  const double tangential = shortest_tangential_period_s(scenario);
-  const double automatic = std::min(contact / steps_per_contact_auto, tangential / steps_per_tangential_period_auto);
+  const Criteria c(scenario);
+  const double automatic = c.automatic_s();
   if (!scenario.run.dt_s) return automatic;
   const double dt = *scenario.run.dt_s;
-  const double limit = std::min(contact / steps_per_contact_minimum, tangential / steps_per_tangential_period_minimum);
+  const double limit = c.limit_s();
   if (dt > limit) {
     std::ostringstream msg;
-    msg << "run.dt_s = " << dt << " s is too long: the shortest Hertz contact of this scenario lasts t_c = " << contact
-        << " s (impact speed " << max_impact_speed_m_s(scenario) << " m/s) and a sticking contact's tangential "
-        << "spring oscillates with period T_s = " << tangential << " s; use run.dt_s <= " << limit
-        << " s (min(t_c/10, T_s/4)), or 'auto' (" << automatic << " s)";
+    msg << "run.dt_s = " << dt
+        << " s is too long: the shortest Hertz contact of this scenario lasts t_c = " << c.contact_s
+        << " s (impact speed " << max_impact_speed_m_s(scenario) << " m/s), a sticking contact's "
+        << "tangential spring oscillates with period T_s = " << c.tangential_s << " s, and " << c.relaxation.what
+        << " relaxes in tau = m/c = " << c.relaxation.time_s << " s; use run.dt_s <= " << limit
+        << " s (min(t_c/10, T_s/4, tau/2)), or 'auto' (" << automatic << " s)";
     throw InputError(msg.str());
   }
   return dt;
+}
+
+std::string describe_time_step(const Scenario& scenario) {
+  const Criteria c(scenario);
+  std::ostringstream out;
+  out << choose_time_step_s(scenario) << " s (";
+  if (scenario.run.dt_s) {
+    out << "given; at most " << c.limit_s();
+  } else {
+    const double automatic = c.automatic_s();
+    out << "automatic: "
+        << (automatic == c.relaxation.time_s / steps_per_relaxation_auto ? "tau/10"
+            : automatic == c.contact_s / steps_per_contact_auto          ? "t_c/50"
+                                                                         : "T_s/8");
+  }
+  out << "); shortest Hertz contact t_c = " << c.contact_s << " s at the fastest impact, "
+      << max_impact_speed_m_s(scenario) << " m/s; tangential spring period T_s = " << c.tangential_s
+      << " s; shortest dashpot relaxation tau = m/c = " << c.relaxation.time_s << " s, " << c.relaxation.what;
+  return out.str();
 }
 
 }  // namespace pdamp::soft

@@ -101,6 +101,9 @@ class HardEngine final : public Engine {
   /// HardRestingSettings). Records the collision's time.
   HardContactLaw law_for(double approach_speed_m_s, bool wall, int i, int j);
 
+  /// Throws Interrupted on a stop request and RuntimeFailure past run.max_events.
+  [[gnu::cold, gnu::noinline]] void poll();
+
   // Prediction.
   void push(const Event& event) { queue_.push(event); }
   /// Whatever host-dependent event sphere i had is replaced: returns its new host stamp.
@@ -316,6 +319,13 @@ class HardEngine final : public Engine {
   /// Whether a sphere–sphere collision asks for the cells around both spheres before
   /// it predicts them: only where the cells outgrow the L2 cache, as for the records.
   bool prefetch_cells_ = false;
+  // After the members predict uses, whose layout is measured (see prefetch_records_).
+  /// Events popped so far, all kinds; every poll_interval of them poll() looks at the
+  /// stop request and run.max_events.
+  static constexpr std::int64_t poll_interval = 4096;
+  std::int64_t events_ = 0;
+  std::int64_t max_events_;
+  std::int64_t next_poll_;
 };
 
 }  // namespace pdamp::hard

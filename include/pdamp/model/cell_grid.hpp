@@ -24,8 +24,14 @@ struct CellCoord {
 
 class CellGrid {
  public:
+  /// The most cells a grid may have: the hard engine keeps some 40 bytes a cell.
+  static constexpr int max_cells = 1 << 24;
+  /// The cells of the grid these arguments give (as a double: it may not fit an int).
+  static double cell_count(double cavity_radius_m, double cavity_height_m, double min_cell_size_m);
+
   /// `min_cell_size_m` must be ≥ the largest sphere diameter; the cells are stretched
-  /// to tile the cavity's cross-section exactly.
+  /// to tile the cavity's cross-section exactly. Throws InputError for more than max_cells
+  /// (a scenario's validation refuses such a cavity first, naming its keys).
   CellGrid(double cavity_radius_m, double cavity_height_m, double min_cell_size_m);
 
   double cell_size_m() const { return cell_m_; }
@@ -61,14 +67,19 @@ class CellGrid {
   std::array<int, 27> block_offsets_;  ///< of the 27 cells of a block from its middle, where none wraps or is outside
 };
 
-// Inline: these run for every sphere at every neighbour-list build.
+// Inline: these run for every sphere at every neighbour-list build. A position that is
+// not a number, or far off, still gives a cell of the grid: the engines stop on such a
+// state, and nothing may read memory before they do.
 inline int CellGrid::clamp_xy(double coordinate) const {
   const double cell = std::floor((coordinate + half_width_m_) / cell_m_);
-  return static_cast<int>(std::clamp(cell, 0.0, static_cast<double>(n_xy_ - 1)));
+  return cell > 0.0 ? (cell < n_xy_ - 1 ? static_cast<int>(cell) : n_xy_ - 1) : 0;  // NaN: 0
 }
 
 inline CellCoord CellGrid::coord_of(const Eigen::Vector3d& p) const {
-  return {clamp_xy(p.x()), clamp_xy(p.y()), static_cast<int>(std::floor(p.z() / cell_m_))};
+  constexpr double farthest_layer = 1 << 30;  // any layer index wraps to one of the grid's
+  const double layer = std::floor(p.z() / cell_m_);
+  const int iz = layer > -farthest_layer ? (layer < farthest_layer ? static_cast<int>(layer) : 1 << 30) : -(1 << 30);
+  return {clamp_xy(p.x()), clamp_xy(p.y()), iz};
 }
 
 inline int CellGrid::index(const CellCoord& c) const {

@@ -2,11 +2,13 @@
 /// The interface both engines implement. A scenario and an initial particle state go in;
 /// the same observations, state snapshots and statistics come out of either engine.
 
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "pdamp/errors.hpp"
 #include "pdamp/model/state.hpp"
 
 namespace pdamp {
@@ -32,6 +34,19 @@ class Engine {
   /// Things the user should know about the run (e.g. contacts overlapping more than the
   /// model is good for); printed on stderr and kept in the run's message.
   virtual std::vector<std::string> warnings() const { return {}; }
+
+  /// The flag advance_to looks at as it goes (every step, or every few thousand events):
+  /// once it is true, advance_to throws Interrupted, and the engine's state is not to be
+  /// used. A stop request (SIGINT, SIGTERM) reaches the engines' inner loops through it.
+  void set_stop_request(const std::atomic<bool>* stop) { stop_ = stop; }
+
+ protected:
+  void throw_if_stop_requested() const {
+    if (stop_ && stop_->load(std::memory_order_relaxed)) throw Interrupted("stopped by a signal");
+  }
+
+ private:
+  const std::atomic<bool>* stop_ = nullptr;
 };
 
 }  // namespace pdamp

@@ -13,7 +13,12 @@
 
 namespace pdamp {
 
-/// The most spheres of diameter `diameter_m` that the generator can place in the cavity.
+/// The most spheres a scenario may have.
+constexpr int max_particle_count = 10'000'000;
+
+/// The most spheres of diameter `diameter_m` that the generator can place in the cavity,
+/// or max_particle_count if more fit. Counted without listing the lattice's sites: time
+/// and memory do not grow with the cavity.
 int max_particles_that_fit(const CavitySettings& cavity, double diameter_m);
 
 /// The spheres' volume over the cavity's (the fill of a damper).
@@ -24,7 +29,8 @@ void check_particles_fit(const ParticleSettings& settings, const CavitySettings&
 
 /// Places `settings.count` spheres with the cavity bottom at z = host_z_m, at rest.
 /// Diameters are uniform in [diameter_min_m, diameter_max_m]. Throws InputError if
-/// they do not fit.
+/// they do not fit. Lists the lattice only at the spacing it places at, where it has
+/// about as many sites as spheres (at most about twice as many, when a layer appears).
 Particles place_particles(const ParticleSettings& settings, const CavitySettings& cavity, double host_z_m);
 
 /// Moves overlapping spheres apart — bottom up, each out of the spheres it rests on along

@@ -92,10 +92,18 @@ enum class HardRestitution {
   calibrated,  ///< e_n(v), β0(v) of the soft law, from isolated soft collisions (sim/calibration.hpp)
 };
 
+/// The run's length and resolution, and bounds on the work it may take (README, "Limits"):
+/// a scenario whose steps or samples would exceed them is refused before anything runs;
+/// the hard engine's events, which cannot be foreseen, end the run as failed at the bound.
 struct RunSettings {
   double duration_s = 1.5;
   double sample_interval_s = 1e-3;
   std::optional<double> dt_s;  ///< soft engine time step; empty = automatic
+  /// Time steps of the soft engine (the run's and settling's) and observation steps of the
+  /// run loop (either model).
+  std::int64_t max_steps = 1'000'000'000;
+  std::int64_t max_samples = 1'000'000;      ///< stored samples
+  std::int64_t max_events = 10'000'000'000;  ///< events of the hard engine, all kinds
 };
 
 struct Scenario {

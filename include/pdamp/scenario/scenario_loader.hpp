@@ -1,8 +1,10 @@
 #pragma once
-/// Scenario files: Boost.program_options config syntax (INI sections), one key per
-/// line, `#` comments. Every key has a unit, a default and a validity range, listed by
+/// Scenario files: INI syntax, `[section]` headers, one `key = value` per line, `#`
+/// comments (at the start of a line or after a space; a '#' inside a value is refused).
+/// Every key has a unit, a default and a validity range, listed by
 /// `describe_scenario_keys()` (the CLI help prints it).
 
+#include <cstddef>
 #include <filesystem>
 #include <iosfwd>
 #include <string>
@@ -12,11 +14,16 @@
 
 namespace pdamp {
 
-/// `section.key=value` strings from the command line (`--set`); they win over the file.
+/// `section.key=value` strings from the command line (`--set`); they win over the file, and
+/// where one key is given twice the later wins.
 using ScenarioOverrides = std::vector<std::string>;
 
+/// The most a scenario file may hold (bytes): a scenario is a few kB of text.
+constexpr std::size_t max_scenario_file_bytes = 1 << 20;
+
 /// Reads, overrides and validates a scenario. Throws InputError naming the key, the
-/// value and what would be valid, for the first problem found.
+/// value and what would be valid, for the first problem found. The file must be a
+/// regular file of at most max_scenario_file_bytes.
 Scenario load_scenario(const std::filesystem::path& file, const ScenarioOverrides& overrides = {});
 
 /// The same from text already in memory (`origin` names it in error messages).

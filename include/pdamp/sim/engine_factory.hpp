@@ -16,8 +16,9 @@ std::string_view to_string(Model model);
 /// Throws InputError for anything but "soft" or "hard".
 Model parse_model(std::string_view text);
 
-/// Checks that `model` can run the scenario (the spheres fit, the soft engine's time
-/// step), before any work is done. Throws InputError naming the offending key.
+/// Checks that `model` can run the scenario (the soft engine's time
+/// step, the run's budget: run_budget.hpp), before any work is done. Throws InputError
+/// naming the offending key.
 void check_model_can_run(Model model, const Scenario& scenario);
 
 /// The engine of `model` for the scenario, starting from `initial` (a placement or a

@@ -35,8 +35,8 @@ struct SettledBed {
 };
 
 /// Settles `placement` (positions with the cavity bottom at host.z0_m). Throws
-/// RuntimeFailure if the bed is not at rest after settling_time_limit_s, and
-/// Interrupted when `stop` becomes true.
+/// RuntimeFailure if the bed is not at rest after settling_time_limit_s or its state
+/// stops being finite, and Interrupted (within a time step) when `stop` becomes true.
 SettledBed settle_bed(const Scenario& scenario, const Particles& placement, const std::atomic<bool>* stop = nullptr,
                       const std::function<void(double t_s, double kinetic_J)>& progress = {});
 

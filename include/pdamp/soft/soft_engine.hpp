@@ -61,6 +61,8 @@ class SoftEngine final : public Engine {
   void compute_forces(double dt_s);
   void add_host_forces();
   void kick(double dt_s);
+  /// Throws RuntimeFailure if a position (a sphere's or the host's) is no longer a finite number.
+  void check_state_finite() const;
   void check_particles_inside() const;
 
   double host_acceleration_m_s2() const;

@@ -18,8 +18,26 @@
 /// spheres T_s = 7.4 µs, shorter than t_c/10 — its own Δt = 2.5 µs is past velocity
 /// Verlet's stability limit T_s/π for such a pair.
 ///
-/// `auto` picks Δt = min(t_c(v_max)/50, T_s/8); a given Δt above t_c(v_max)/10 or T_s/4
-/// is refused.
+/// And the dashpots. Velocity Verlet on a damped oscillator m x'' = −k x − c x', with the
+/// dashpot on the half-step velocity as the engine applies it, carries (x_n, v_{n−½}) to
+/// (x_{n+1}, v_{n+½}) by a matrix whose eigenvalues solve
+///   λ² − (2 − γ − Ω²) λ + (1 − γ) = 0,   Ω = ω Δt,  γ = c Δt / m = Δt / τ.
+/// Both lie inside the unit circle iff γ < 2 and Ω² + 2γ < 4 (Jury's conditions): without
+/// the dashpot the familiar Ω < 2 (Δt < T/π); without the spring γ < 2, beyond which each
+/// step reverses the relative velocity and amplifies it (the scheme's 1 − γ for e^{−γ}).
+/// The relaxation times τ = m/c taken: the normal dashpot c_n on m* (m/2 for a pair of the
+/// lightest spheres, m against a wall), the tangential c_s on m_t (m/7, 2m/7), the host's
+/// damper C on M (unless its motion is prescribed) and the settling drag (τ = t_fall,
+/// settling.hpp).
+///
+/// `auto` picks Δt = min(t_c(v_max)/50, T_s/8, τ_min/10); a given Δt above
+/// min(t_c(v_max)/10, T_s/4, τ_min/2) is refused. At τ/10 the explicit 1 − γ is within
+/// 0.5 % of e^{−γ}. At the refusal limit the tangential oscillator has Ω ≤ π/2 and γ ≤ ½,
+/// so Ω² + 2γ ≤ 3.47 < 4; the normal one, whose stiffness at the deepest overlap
+/// (3/2) k_n δ_max^{1/2} gives ω t_c = 4.03, has Ω ≤ 0.40: every contact stays stable.
+/// For the paper's laws the dashpots bind nowhere (γ ≤ 0.04 at the automatic step).
+
+#include <string>
 
 #include "pdamp/scenario/scenario.hpp"
 
@@ -29,6 +47,8 @@ constexpr double steps_per_contact_auto = 50.0;
 constexpr double steps_per_contact_minimum = 10.0;
 constexpr double steps_per_tangential_period_auto = 8.0;
 constexpr double steps_per_tangential_period_minimum = 4.0;
+constexpr double steps_per_relaxation_auto = 10.0;
+constexpr double steps_per_relaxation_minimum = 2.0;
 
 /// Duration of an undamped Hertz contact (s).
 double hertz_contact_time_s(double effective_mass_kg, double kn_N_m1_5, double impact_speed_m_s);
@@ -43,8 +63,20 @@ double shortest_contact_time_s(const Scenario& scenario);
 /// infinite without tangential springs.
 double shortest_tangential_period_s(const Scenario& scenario);
 
+/// A dashpot's relaxation time τ = m/c and what it is.
+struct Relaxation {
+  double time_s;
+  std::string what;  ///< e.g. "the sphere-sphere normal dashpot soft.cn_N_s_m"
+};
+
+/// The shortest relaxation time over the dashpots listed above (time_s infinite without any).
+Relaxation shortest_relaxation(const Scenario& scenario);
+
 /// The time step to use: run.dt_s, or automatic. Throws InputError naming run.dt_s if a
 /// given step cannot resolve the contacts.
 double choose_time_step_s(const Scenario& scenario);
+
+/// The time step and what sets it, in words (for `pdamp check` and messages).
+std::string describe_time_step(const Scenario& scenario);
 
 }  // namespace pdamp::soft

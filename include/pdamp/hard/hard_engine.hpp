@@ -313,13 +313,13 @@ class HardEngine final : public Engine {
   } stats_;
   /// Whether predict asks for all the neighbours' records at once before screening them:
   /// only where the records outgrow the L2 cache (below that the prefetches only cost
-  /// instructions). Last in the class: among predict's members it shifts their layout and
-  /// slows the gas (tools/bench/HISTORY.md).
+  /// instructions). After predict's members: among them it shifts their layout and slows
+  /// the gas (tools/bench/HISTORY.md).
   bool prefetch_records_ = false;
   /// Whether a sphere–sphere collision asks for the cells around both spheres before
   /// it predicts them: only where the cells outgrow the L2 cache, as for the records.
   bool prefetch_cells_ = false;
-  // After the members predict uses, whose layout is measured (see prefetch_records_).
+  // Likewise after predict's members (see prefetch_records_).
   /// Events popped so far, all kinds; every poll_interval of them poll() looks at the
   /// stop request and run.max_events.
   static constexpr std::int64_t poll_interval = 4096;

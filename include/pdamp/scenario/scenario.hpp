@@ -92,7 +92,7 @@ enum class HardRestitution {
   calibrated,  ///< e_n(v), β0(v) of the soft law, from isolated soft collisions (sim/calibration.hpp)
 };
 
-/// The run's length and resolution, and bounds on the work it may take (README, "Limits"):
+/// The run's length and resolution, and bounds on the work it may take (sim/run_budget.hpp):
 /// a scenario whose steps or samples would exceed them is refused before anything runs;
 /// the hard engine's events, which cannot be foreseen, end the run as failed at the bound.
 struct RunSettings {

@@ -133,6 +133,16 @@ TEST_CASE("excitation keys must match the excitation mode") {
   CHECK(base.excitation.amplitude_m == 0.001);
 }
 
+TEST_CASE("white space around a value, a carriage return included, is not part of it") {
+  // Found by the fuzzer: '33063.2\r  # comment' kept the '\r', and the canonical text then
+  // read back without it.
+  const Scenario s = scenario_from("[host]\r\nstiffness_N_m = 33063.2\r  # K\r\n[scenario]\nname =\v run 7 \f\n");
+  CHECK(s.host.stiffness_N_m == 33063.2);
+  CHECK(s.name == "run 7");
+  CHECK(contains(s.canonical_text, "stiffness_N_m = 33063.2\n"));
+  CHECK(parse_scenario(s.canonical_text, s.name, "canonical").canonical_text == s.canonical_text);
+}
+
 TEST_CASE("the canonical text reproduces the scenario") {
   const Scenario s = scenario_from("[host]\nz0_m = 0.01\n[particles]\ncount = 10\ndiameter_m = 0.001 0.0012\n");
   const Scenario again = parse_scenario(s.canonical_text, "x", "canonical");

@@ -341,7 +341,8 @@ void require_known_key(const std::string& key, const std::string& where) {
   }
 }
 
-bool is_blank(char c) { return c == ' ' || c == '\t'; }
+/// White space around keys and values, and before a comment (a line ends at '\n').
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 std::string_view trim(std::string_view text) {
   while (!text.empty() && is_blank(text.front())) text.remove_prefix(1);
@@ -382,7 +383,6 @@ void parse_file_text(RawScenario& raw, std::string_view text, const std::string&
     std::string_view line = text.substr(start, end - start);
     start = end + 1;
     ++number;
-    if (line.ends_with('\r')) line.remove_suffix(1);
     const std::string where = origin + ", line " + std::to_string(number);
     line = trim(strip_comment(line, where));
     if (line.empty()) continue;

@@ -17,7 +17,7 @@ SettledBed settle_bed(const Scenario& scenario, const Particles& placement, cons
   const double mean_mass = placement.total_mass_kg() / n;
   const double mean_diameter = 2.0 * placement.radius_m.mean();
   const double threshold_J = settled_energy_fraction * mean_mass * g * mean_diameter * n;
-  const double fall_time_s = std::sqrt(2.0 * scenario.cavity.height_m / g);
+  const double fall_time_s = settling_fall_time_s(scenario);
 
   SoftEngineOptions options;
   options.hold_host = true;

@@ -8,6 +8,7 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/host.hpp"
+#include "pdamp/soft/settling.hpp"
 
 namespace pdamp::soft {
 
@@ -53,21 +54,23 @@ double shortest_contact_time_s(const Scenario& scenario) {
 
 Relaxation shortest_relaxation(const Scenario& scenario) {
   Relaxation shortest{std::numeric_limits<double>::infinity(), "no dashpot"};
-  auto consider = [&](double mass_kg, double damping_N_s_m, const std::string& what) {
-    if (damping_N_s_m > 0.0 && mass_kg / damping_N_s_m < shortest.time_s) shortest = {mass_kg / damping_N_s_m, what};
+  auto consider = [&](double time_s, const char* what) {
+    if (time_s < shortest.time_s) shortest = {time_s, what};
+  };
+  auto mass_over = [](double mass_kg, double damping_N_s_m) {
+    return damping_N_s_m > 0.0 ? mass_kg / damping_N_s_m : std::numeric_limits<double>::infinity();
   };
   const double m = lightest_sphere_kg(scenario);
-  consider(0.5 * m, scenario.soft_particle.cn_N_s_m, "the sphere-sphere normal dashpot soft.cn_N_s_m");
-  consider(m, scenario.soft_wall.cn_N_s_m, "the sphere-wall normal dashpot soft_wall.cn_N_s_m");
-  consider(m / 7.0, scenario.soft_particle.cs_N_s_m, "the sphere-sphere tangential dashpot soft.cs_N_s_m");
-  consider(2.0 * m / 7.0, scenario.soft_wall.cs_N_s_m, "the sphere-wall tangential dashpot soft_wall.cs_N_s_m");
+  consider(mass_over(0.5 * m, scenario.soft_particle.cn_N_s_m), "the sphere-sphere normal dashpot soft.cn_N_s_m");
+  consider(mass_over(m, scenario.soft_wall.cn_N_s_m), "the sphere-wall normal dashpot soft_wall.cn_N_s_m");
+  consider(mass_over(m / 7.0, scenario.soft_particle.cs_N_s_m), "the sphere-sphere tangential dashpot soft.cs_N_s_m");
+  consider(mass_over(2.0 * m / 7.0, scenario.soft_wall.cs_N_s_m),
+           "the sphere-wall tangential dashpot soft_wall.cs_N_s_m");
   if (!scenario.host_has_infinite_mass()) {
-    consider(scenario.host.mass_kg, scenario.host.damping_N_s_m, "the host's damper host.damping_N_s_m");
+    consider(mass_over(scenario.host.mass_kg, scenario.host.damping_N_s_m), "the host's damper host.damping_N_s_m");
   }
-  if (const double g = scenario.gravity_m_s2.norm(); g > 0.0) {
-    // The settling drag −m v / t_fall (settling.hpp).
-    consider(std::sqrt(2.0 * scenario.cavity.height_m / g), 1.0,
-             "the settling drag (1/t_fall, from cavity.height_m and gravity.g_m_s2)");
+  if (scenario.gravity_m_s2.norm() > 0.0) {
+    consider(settling_fall_time_s(scenario), "the settling drag (from cavity.height_m and gravity.g_m_s2)");
   }
   return shortest;
 }

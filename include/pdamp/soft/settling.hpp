@@ -15,6 +15,7 @@
 /// gravity there is nothing to settle and the placement is returned as it is.
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 
@@ -26,6 +27,11 @@ namespace pdamp::soft {
 constexpr double settled_energy_fraction = 1e-8;  ///< of m̄ |g| d̄ per sphere
 constexpr double settling_check_interval_s = 0.005;
 constexpr double settling_time_limit_s = 5.0;
+
+/// t_fall = sqrt(2H/|g|), the drag's time constant (s); gravity must not be zero.
+inline double settling_fall_time_s(const Scenario& scenario) {
+  return std::sqrt(2.0 * scenario.cavity.height_m / scenario.gravity_m_s2.norm());
+}
 
 struct SettledBed {
   Particles particles;

@@ -203,13 +203,18 @@ double SoftEngine::next_step_s(double t_s) {
 }
 
 void SoftEngine::check_state_finite() const {
-  for (int i = 0; i < sphere_count(); ++i) {
-    if (balls_.vector(i).allFinite() && std::isfinite(host_.z_m)) continue;
+  auto diverged = [&](const std::string& what) {
     std::ostringstream msg;
-    msg << "the soft engine's state stopped being finite at t = " << t_s_ << " s (particle " << original_index_[i]
-        << " at " << balls_.vector(i).transpose() << " m, the host at " << host_.z_m << " m): the integration "
-        << "diverged; its time step " << dt_s_ << " s is too long for the forces of this scenario";
-    throw RuntimeFailure(msg.str());
+    msg << "the soft engine's state stopped being finite at t = " << t_s_ << " s (" << what
+        << "): the integration diverged; its time step " << dt_s_ << " s is too long for the forces of this scenario";
+    return RuntimeFailure(msg.str());
+  };
+  if (!std::isfinite(host_.z_m)) throw diverged("the host at " + std::to_string(host_.z_m) + " m");
+  for (int i = 0; i < sphere_count(); ++i) {
+    if (balls_.vector(i).allFinite()) continue;
+    std::ostringstream where;
+    where << "particle " << original_index_[i] << " at " << balls_.vector(i).transpose() << " m";
+    throw diverged(where.str());
   }
 }
 

@@ -583,7 +583,8 @@ TEST_CASE("progress on a terminal: percent and time left on one line") {
   test::TempDir dir("cli-terminal");
   const std::string text =
       stderr_on_terminal({"run", "--scenario", table1(), "--model", "soft", "--set", "particles.count=0", "--set",
-                          "run.sample_interval_s=1e-5", "--duration", "200", "--db", (dir / "runs.sqlite").string()},
+                          "run.sample_interval_s=1e-5", "--set", "run.max_samples=1e8", "--duration", "200", "--db",
+                          (dir / "runs.sqlite").string()},
                          dir, 4.0);
   INFO(text);
   CHECK(text.find("\r  soft model: t = ") != std::string::npos);
@@ -710,5 +711,10 @@ TEST_CASE("SIGINT while the bed settles ends pdamp within a second") {
   const auto [took, code] = stop_and_time(p, SIGINT);
   CHECK(code == 128 + SIGINT);
   CHECK(took < std::chrono::seconds(1));
-  CHECK(p.err().find("stopped while settling the bed") != std::string::npos);
+  CHECK(p.out().find("interrupted (stopped while settling the bed)") != std::string::npos);
+  RunStore store(db, StoreAccess::read);
+  const auto s = store.summary(1);
+  REQUIRE(s);
+  CHECK(s->status == "interrupted");
+  CHECK(s->message == "stopped while settling the bed");
 }

@@ -167,7 +167,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
         "force", "also delete runs marked running (killed runs stay so; a run still going then fails)");
     po::positional_options_description positional;
     positional.add("run-id", -1);
-    const auto vm = parse(args, options, positional);
+    const po::variables_map vm = parse(args, options, positional).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;

@@ -4,7 +4,9 @@
 # Usage: tools/setup.sh [extra Debian packages, e.g. valgrind for tools/bench-hard.sh --counts]
 set -euo pipefail
 
-packages=(g++ cmake make libboost-dev libboost-program-options-dev libeigen3-dev libsqlite3-dev doctest-dev sqlite3 "$@")
+# python3-matplotlib: the test of tools/plot_rom.py.
+packages=(g++ cmake make libboost-dev libboost-program-options-dev libeigen3-dev libsqlite3-dev doctest-dev sqlite3
+  python3-matplotlib "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -15,6 +15,7 @@
 #include "pdamp/errors.hpp"
 #include "pdamp/soft/simd_path.hpp"
 #include "pdamp/version.hpp"
+#include "rom_command.hpp"
 
 namespace po = boost::program_options;
 using namespace pdamp;
@@ -36,6 +37,8 @@ constexpr const char* usage =
     "  check   --scenario FILE [--set k=v ...]\n"
     "          validate a scenario and print every key with its resolved value\n"
     "  keys    list every scenario key with its unit, default and meaning\n"
+    "  rom     --table FILE [--mass M --stiffness K --force F0|--base Y --freq A:B:N] [--out FILE]\n"
+    "          a characterised damper's table on any single-degree-of-freedom host (harmonic balance)\n"
     "\n"
     "  pdamp <command> --help   options of a command\n"
     "  pdamp --version\n"
@@ -186,6 +189,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     }
     return check_command(scenario_request(line, command));
   }
+  if (command == "rom") return rom_command(args);
   if (command == "keys") {
     describe_scenario_keys(std::cout);
     return 0;

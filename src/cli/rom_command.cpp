@@ -1,0 +1,150 @@
+#include "rom_command.hpp"
+
+#include <boost/program_options.hpp>
+#include <chrono>
+#include <iostream>
+#include <optional>
+
+#include "pdamp/errors.hpp"
+#include "pdamp/rom/prediction_files.hpp"
+#include "pdamp/rom/table_files.hpp"
+
+namespace po = boost::program_options;
+
+namespace pdamp {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double milliseconds_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+po::options_description rom_options() {
+  po::options_description table("damper table");
+  table.add_options()("table", po::value<std::string>(), "damper table file, .csv or .json (docs/rom.md, Table files)")(
+      "export-table", po::value<std::vector<std::string>>()->composing(),
+      "write the table as FILE.csv or FILE.json (repeatable)");
+  po::options_description host("host (single degree of freedom) and excitation");
+  host.add_options()("mass", po::value<double>(), "host mass M, kg (> 0)")("stiffness", po::value<double>(),
+                                                                           "host stiffness K, N/m (> 0)")(
+      "damping", po::value<double>()->default_value(0.0), "host damping C, N s/m (>= 0)")(
+      "force", po::value<double>(), "force excitation amplitude F0 on the host, N")(
+      "base", po::value<double>(), "base excitation: amplitude Y of the base's motion, m")(
+      "freq", po::value<std::string>(), "frequencies START:STOP:COUNT in Hz, within the table's frequencies")(
+      "spacing", po::value<std::string>()->default_value("linear"), "linear or log spacing of the frequencies");
+  po::options_description output("output");
+  output.add_options()("out", po::value<std::vector<std::string>>()->composing(),
+                       "write the prediction as FILE.csv or FILE.json (repeatable)")("quiet", "no table on stdout")(
+      "time", "print the time the prediction took on stderr")("help,h", "show this help");
+  po::options_description all(
+      "pdamp rom --table FILE [--mass M --stiffness K [--damping C] --force F0|--base Y "
+      "--freq START:STOP:COUNT] [options]");
+  all.add(table).add(host).add(output);
+  return all;
+}
+
+std::vector<std::string> files(const po::variables_map& vm, const std::string& option) {
+  return vm.count(option) ? vm[option].as<std::vector<std::string>>() : std::vector<std::string>{};
+}
+
+/// Checked before any work so that a bad name leaves nothing written.
+void check_output(const std::filesystem::path& file, const std::string& what) {
+  rom::file_format(file, what);
+  const auto folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+  if (!std::filesystem::is_directory(folder)) {
+    throw InputError(what + " '" + file.string() + "': folder '" + folder.string() + "' does not exist");
+  }
+}
+
+/// The table the command works on, and its name for messages and file headers. Later sources
+/// (a stored characterisation) add a branch here.
+std::pair<rom::DamperTable, std::string> table_source(const po::variables_map& vm) {
+  if (!vm.count("table")) throw InputError("pdamp rom: --table is required (a damper table, .csv or .json)");
+  const std::string file = vm["table"].as<std::string>();
+  return {rom::read_damper_table(file), file};
+}
+
+bool wants_prediction(const po::variables_map& vm) {
+  for (const char* option : {"mass", "stiffness", "force", "base", "freq"}) {
+    if (vm.count(option)) return true;
+  }
+  return false;
+}
+
+rom::PredictionSetup prediction_setup(const po::variables_map& vm) {
+  for (const char* option : {"mass", "stiffness", "freq"}) {
+    if (!vm.count(option)) throw InputError(std::string("pdamp rom: --") + option + " is required to predict");
+  }
+  if (vm.count("force") == vm.count("base")) {
+    throw InputError("pdamp rom: give exactly one of --force F0 (N) and --base Y (m)");
+  }
+  const std::string spacing = vm["spacing"].as<std::string>();
+  if (spacing != "linear" && spacing != "log") {
+    throw InputError("pdamp rom: --spacing '" + spacing + "': must be linear or log");
+  }
+  rom::PredictionSetup setup;
+  setup.host = {vm["mass"].as<double>(), vm["stiffness"].as<double>(), vm["damping"].as<double>()};
+  const bool force = vm.count("force") > 0;
+  setup.excitation = {force ? rom::ExcitationKind::force : rom::ExcitationKind::base,
+                      vm[force ? "force" : "base"].as<double>()};
+  setup.range = rom::parse_frequency_range(vm["freq"].as<std::string>(),
+                                           spacing == "log" ? rom::Spacing::log : rom::Spacing::linear, "--freq");
+  rom::validate_host(setup.host, setup.excitation);
+  return setup;
+}
+
+}  // namespace
+
+int rom_command(const std::vector<std::string>& args) {
+  const po::options_description options = rom_options();
+  po::variables_map vm;
+  try {
+    po::store(po::command_line_parser(args).options(options).run(), vm);
+  } catch (const po::error& e) {
+    throw InputError("pdamp rom: " + std::string(e.what()));
+  }
+  if (vm.count("help")) {
+    std::cout << options << "\nColumns, units and the model: docs/rom.md\n";
+    return 0;
+  }
+  const auto exports = files(vm, "export-table"), outputs = files(vm, "out");
+  for (const auto& f : exports) check_output(f, "--export-table");
+  for (const auto& f : outputs) check_output(f, "--out");
+  const bool predict = wants_prediction(vm);
+  if (!predict && exports.empty()) {
+    throw InputError(
+        "pdamp rom: nothing to do: give a host and an excitation (--mass, --stiffness, --force or --base, --freq) to "
+        "predict, or --export-table FILE");
+  }
+  if (!predict && !outputs.empty()) throw InputError("pdamp rom: --out needs a prediction (a host and --freq)");
+
+  const auto [table, table_name] = table_source(vm);
+  const rom::TableInterpolator interpolator(table, table_name);
+  std::optional<rom::PredictionSetup> setup;
+  rom::ResponseCurve curve;
+  if (predict) {
+    setup = prediction_setup(vm);
+    setup->table_name = table_name;
+    setup->table = &interpolator.table();
+    const auto frequencies = rom::frequencies_of(setup->range);
+    const auto start = Clock::now();
+    curve = rom::predict_response(interpolator, setup->host, setup->excitation, frequencies);
+    const double elapsed_ms = milliseconds_since(start);
+    if (!rom::covers_something(curve)) {
+      throw InputError("pdamp rom: the table cannot cover this host and excitation: " + rom::coverage_summary(curve));
+    }
+    if (vm.count("time")) {
+      std::cerr << "pdamp rom: " << frequencies.size() << " frequencies predicted in " << elapsed_ms << " ms\n";
+    }
+  }
+
+  for (const auto& f : exports) rom::write_text_file(f, rom::damper_table_text(interpolator.table(), f));
+  if (setup) {
+    for (const auto& f : outputs) rom::write_text_file(f, rom::prediction_text(*setup, curve, f));
+    if (!vm.count("quiet")) rom::print_prediction(std::cout, *setup, curve);
+  }
+  return 0;
+}
+
+}  // namespace pdamp

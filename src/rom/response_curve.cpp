@@ -201,11 +201,12 @@ std::string coverage_summary(const ResponseCurve& curve) {
       highest = std::max(highest, p.highest_amplitude_m);
     }
   }
+  const std::string of = " of " + std::to_string(curve.points.size()) + " frequencies";
   std::ostringstream out;
   out << "no frequency has a response inside the characterised amplitudes";
-  if (below) out << "; at " << below << " the response lies below them (smallest " << text(lowest) << " m)";
-  if (above) out << "; at " << above << " it lies above them (largest " << text(highest) << " m)";
-  if (uncovered) out << "; at " << uncovered << " the neighbouring frequency columns share no value of Gamma";
+  if (below) out << "; at " << below << of << " a response lies below them (smallest " << text(lowest) << " m)";
+  if (above) out << "; at " << above << of << " a response lies above them (largest " << text(highest) << " m)";
+  if (uncovered) out << "; at " << uncovered << of << " the neighbouring frequency columns share no value of Gamma";
   return out.str();
 }
 

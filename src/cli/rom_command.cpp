@@ -26,8 +26,8 @@ po::options_description rom_options() {
       "export-table", po::value<std::vector<std::string>>()->composing(),
       "write the table as FILE.csv or FILE.json (repeatable)");
   po::options_description host("host (single degree of freedom) and excitation");
-  host.add_options()("mass", po::value<double>(), "host mass M, kg (> 0)")("stiffness", po::value<double>(),
-                                                                           "host stiffness K, N/m (> 0)")(
+  host.add_options()("mass", po::value<double>(), "host mass M without the particles (container included), kg (> 0)")(
+      "stiffness", po::value<double>(), "host stiffness K, N/m (> 0)")(
       "damping", po::value<double>()->default_value(0.0), "host damping C, N s/m (>= 0)")(
       "force", po::value<double>(), "force excitation amplitude F0 on the host, N")(
       "base", po::value<double>(), "base excitation: amplitude Y of the base's motion, m")(

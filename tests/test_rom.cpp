@@ -543,6 +543,9 @@ TEST_CASE("rom: a bad table is refused with the reason") {
   json_refuses(replaced(json, "[0.1, 0.1, 0.1]", "[0.1, \"0.1\", 0.1]"),
                "$.c_eq_N_s_m[0][1] is text: must be a number");
   json_refuses(replaced(json, "[true, true, true]", "[true, 1, true]"), "must be true or false");
+  // A source that would reach a terminal as an escape sequence.
+  json_refuses(replaced(json, "\"source\": \"test\"", "\"source\": \"\\u001b[2Jx\""),
+               "without control characters (27 at character 1)");
 }
 
 TEST_CASE("rom: bad hosts, excitations and frequency ranges are refused with the reason") {

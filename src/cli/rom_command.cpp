@@ -2,12 +2,15 @@
 
 #include <boost/program_options.hpp>
 #include <chrono>
+#include <iomanip>
 #include <iostream>
 #include <optional>
+#include <sstream>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/rom/prediction_files.hpp"
 #include "pdamp/rom/table_files.hpp"
+#include "text_table.hpp"
 
 namespace po = boost::program_options;
 
@@ -94,6 +97,70 @@ rom::PredictionSetup prediction_setup(const po::variables_map& vm) {
   return setup;
 }
 
+/// `value` with `digits` significant digits, or `fixed` digits after the point.
+std::string digits(double value, int digits, bool fixed = false) {
+  std::ostringstream out;
+  if (fixed) out << std::fixed;
+  out << std::setprecision(digits) << value;
+  return out.str();
+}
+
+void print_setup(std::ostream& out, const rom::PredictionSetup& setup) {
+  const rom::DamperTable& t = *setup.table;
+  out << printable("table " + setup.table_name + " (" + t.source + ")") << ": bed mass " << t.bed_mass_kg << " kg, "
+      << t.amplitudes_m.size() << " amplitudes " << t.amplitudes_m.front() << " to " << t.amplitudes_m.back() << " m x "
+      << t.frequencies_hz.size() << " frequencies " << t.frequencies_hz.front() << " to " << t.frequencies_hz.back()
+      << " Hz\nhost M = " << setup.host.mass_kg << " kg, K = " << setup.host.stiffness_N_m
+      << " N/m, C = " << setup.host.damping_N_s_m << " N s/m; " << rom::excitation_text(setup.excitation) << "; "
+      << rom::range_text(setup.range) << "\n";
+}
+
+/// One row per solution or flagged side; a flagged side has only its frequency and flags.
+void print_rows(std::ostream& out, const rom::PredictionSetup& setup, const rom::ResponseCurve& curve) {
+  const char* ratio = setup.excitation.kind == rom::ExcitationKind::force ? "|X|K/F0" : "|X|/Y";
+  std::vector<TextTable::Column> columns;
+  for (const char* header :
+       {"f_Hz", "branch", "stability", "|X|_m", ratio, "phase_deg", "Gamma", "m_app_kg", "c_eq_Ns/m", "eta", "sweep"}) {
+    columns.push_back({header, true});
+  }
+  columns.push_back({"flags"});
+  TextTable table(columns);
+  for (const rom::PredictionRow& row : rom::prediction_rows(setup, curve)) {
+    std::vector<std::string> cells = {digits(row.frequency_hz, 5)};
+    if (row.solution) {
+      const rom::Solution& s = *row.solution;
+      const std::string sweep = std::string(s.on_sweep_up ? "u" : "") + (s.on_sweep_down ? "d" : "");
+      cells.insert(cells.end(),
+                   {std::to_string(s.branch), rom::to_string(s.stability), digits(s.amplitude_m, 4),
+                    digits(row.amplitude_ratio, 4), digits(row.phase_deg, 2, true),
+                    row.gamma ? digits(*row.gamma, 4) : "-", digits(s.damper.m_app_kg, 4),
+                    digits(s.damper.c_eq_N_s_m, 4), digits(row.loss_factor, 4), sweep.empty() ? "-" : sweep});
+    }
+    cells.resize(columns.size() - 1);
+    cells.push_back(rom::flags_text(row));
+    table.add_row(cells);
+  }
+  table.print(out);
+}
+
+void print_jumps(std::ostream& out, const char* direction, const std::vector<rom::Jump>& jumps) {
+  out << "sweep " << direction << ": " << (jumps.empty() ? "no jump" : std::to_string(jumps.size()) + " jump(s)")
+      << "\n";
+  for (const rom::Jump& j : jumps) {
+    out << "  between " << j.from_frequency_hz << " and " << j.to_frequency_hz << " Hz: |X| "
+        << digits(j.from_amplitude_m, 4) << " m (branch " << j.from_branch << ") -> " << digits(j.to_amplitude_m, 4)
+        << " m (branch " << j.to_branch << ")\n";
+  }
+}
+
+/// The prediction for the terminal: what was predicted, the rows, the sweeps' jumps.
+void print_prediction(std::ostream& out, const rom::PredictionSetup& setup, const rom::ResponseCurve& curve) {
+  print_setup(out, setup);
+  print_rows(out, setup, curve);
+  print_jumps(out, "up", curve.jumps_up);
+  print_jumps(out, "down", curve.jumps_down);
+}
+
 }  // namespace
 
 int rom_command(const std::vector<std::string>& args) {
@@ -142,7 +209,7 @@ int rom_command(const std::vector<std::string>& args) {
   for (const auto& f : exports) rom::write_text_file(f, rom::damper_table_text(interpolator.table(), f));
   if (setup) {
     for (const auto& f : outputs) rom::write_text_file(f, rom::prediction_text(*setup, curve, f));
-    if (!vm.count("quiet")) rom::print_prediction(std::cout, *setup, curve);
+    if (!vm.count("quiet")) print_prediction(std::cout, *setup, curve);
   }
   return 0;
 }

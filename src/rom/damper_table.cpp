@@ -1,5 +1,6 @@
 #include "pdamp/rom/damper_table.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -56,8 +57,12 @@ double DamperTable::gamma(std::size_t amplitude_index, std::size_t frequency_ind
 }
 
 void validate_damper_table(const DamperTable& table, const std::string& where) {
-  if (table.source.find_first_of("\r\n") != std::string::npos) {
-    throw InputError(where + ": the source description must be one line");
+  const auto control = std::find_if(table.source.begin(), table.source.end(),
+                                    [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
+  if (control != table.source.end()) {
+    throw InputError(where + ": the source description must be one line of text, without control characters (" +
+                     std::to_string(static_cast<unsigned char>(*control)) + " at character " +
+                     std::to_string(control - table.source.begin() + 1) + ")");
   }
   if (!std::isfinite(table.bed_mass_kg) || table.bed_mass_kg < 0) {
     throw InputError(where + ": bed_mass_kg = " + number(table.bed_mass_kg) + ": must be a finite number >= 0");

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <functional>
-#include <iomanip>
 #include <numbers>
 #include <sstream>
 #include <type_traits>
@@ -109,22 +108,6 @@ PredictionRow flag_row(double frequency_hz, const char* flag) {
   return row;
 }
 
-std::string joined(const std::vector<std::string>& words, const char* separator) {
-  std::string out;
-  for (const auto& w : words) out += (out.empty() ? "" : separator) + w;
-  return out;
-}
-
-std::string excitation_text(const Excitation& e) {
-  return e.kind == ExcitationKind::force ? "force F0 = " + text::number(e.amplitude) + " N"
-                                         : "base motion Y = " + text::number(e.amplitude) + " m";
-}
-
-std::string range_text(const FrequencyRange& r) {
-  return std::to_string(r.count) + " frequencies " + text::number(r.start_hz) + " to " + text::number(r.stop_hz) +
-         " Hz (" + (r.spacing == Spacing::linear ? "linear" : "log") + ")";
-}
-
 void json_jumps(std::ostream& out, const char* key, const std::vector<Jump>& jumps) {
   out << "    " << text::json_string(key) << ": [";
   for (std::size_t i = 0; i < jumps.size(); ++i) {
@@ -138,17 +121,23 @@ void json_jumps(std::ostream& out, const char* key, const std::vector<Jump>& jum
   out << (jumps.empty() ? "]" : "\n    ]");
 }
 
-void print_jumps(std::ostream& out, const char* direction, const std::vector<Jump>& jumps) {
-  out << "sweep " << direction << ": " << (jumps.empty() ? "no jump" : std::to_string(jumps.size()) + " jump(s)")
-      << "\n";
-  for (const Jump& j : jumps) {
-    out << "  between " << text::number(j.from_frequency_hz) << " and " << text::number(j.to_frequency_hz)
-        << " Hz: |X| " << j.from_amplitude_m << " m (branch " << j.from_branch << ") -> " << j.to_amplitude_m
-        << " m (branch " << j.to_branch << ")\n";
-  }
+}  // namespace
+
+std::string excitation_text(const Excitation& e) {
+  return e.kind == ExcitationKind::force ? "force F0 = " + text::number(e.amplitude) + " N"
+                                         : "base motion Y = " + text::number(e.amplitude) + " m";
 }
 
-}  // namespace
+std::string range_text(const FrequencyRange& r) {
+  return std::to_string(r.count) + " frequencies " + text::number(r.start_hz) + " to " + text::number(r.stop_hz) +
+         " Hz (" + (r.spacing == Spacing::linear ? "linear" : "log") + ")";
+}
+
+std::string flags_text(const PredictionRow& row) {
+  std::string out;
+  for (const auto& flag : row.flags) out += (out.empty() ? "" : ";") + flag;
+  return out;
+}
 
 std::vector<PredictionRow> prediction_rows(const PredictionSetup& setup, const ResponseCurve& curve) {
   std::vector<PredictionRow> rows;
@@ -176,7 +165,7 @@ std::string prediction_csv(const PredictionSetup& setup, const ResponseCurve& cu
   out << "flags\n";
   for (const PredictionRow& row : prediction_rows(setup, curve)) {
     for (const Column& c : columns()) out << cell_text(c.value(row), false) << ",";
-    out << joined(row.flags, ";") << "\n";
+    out << flags_text(row) << "\n";
   }
   return out.str();
 }
@@ -214,40 +203,6 @@ std::string prediction_json(const PredictionSetup& setup, const ResponseCurve& c
   json_jumps(out, "sweep_down", curve.jumps_down);
   out << "\n  }\n}\n";
   return out.str();
-}
-
-void print_prediction(std::ostream& out, const PredictionSetup& setup, const ResponseCurve& curve) {
-  const DamperTable& t = *setup.table;
-  out << "table " << setup.table_name << " (" << t.source << "): bed mass " << t.bed_mass_kg << " kg, "
-      << t.amplitudes_m.size() << " amplitudes " << t.amplitudes_m.front() << " to " << t.amplitudes_m.back() << " m x "
-      << t.frequencies_hz.size() << " frequencies " << t.frequencies_hz.front() << " to " << t.frequencies_hz.back()
-      << " Hz\nhost M = " << setup.host.mass_kg << " kg, K = " << setup.host.stiffness_N_m
-      << " N/m, C = " << setup.host.damping_N_s_m << " N s/m; " << excitation_text(setup.excitation) << "; "
-      << range_text(setup.range) << "\n";
-  const char* ratio = setup.excitation.kind == ExcitationKind::force ? "|X|K/F0" : "|X|/Y";
-  out << std::setw(10) << "f_Hz" << std::setw(7) << "branch" << std::setw(10) << "stability" << std::setw(12) << "|X|_m"
-      << std::setw(11) << ratio << std::setw(9) << "phase" << std::setw(9) << "Gamma" << std::setw(11) << "m_app_kg"
-      << std::setw(11) << "c_eq_Ns/m" << std::setw(10) << "eta" << std::setw(7) << "sweep"
-      << "  flags\n";
-  for (const PredictionRow& row : prediction_rows(setup, curve)) {
-    out << std::setw(10) << std::setprecision(5) << row.frequency_hz;
-    if (row.solution) {
-      const Solution& s = *row.solution;
-      const std::string sweep = std::string(s.on_sweep_up ? "u" : "") + (s.on_sweep_down ? "d" : "");
-      std::ostringstream phase, gamma;
-      phase << std::fixed << std::setprecision(2) << row.phase_deg;
-      if (row.gamma) gamma << std::setprecision(4) << *row.gamma;
-      out << std::setw(7) << s.branch << std::setw(10) << to_string(s.stability) << std::setprecision(4)
-          << std::setw(12) << s.amplitude_m << std::setw(11) << row.amplitude_ratio << std::setw(9) << phase.str()
-          << std::setw(9) << (row.gamma ? gamma.str() : "-") << std::setw(11) << s.damper.m_app_kg << std::setw(11)
-          << s.damper.c_eq_N_s_m << std::setw(10) << row.loss_factor << std::setw(7) << (sweep.empty() ? "-" : sweep);
-    } else {
-      out << std::setw(7 + 10 + 12 + 11 + 9 + 9 + 11 + 11 + 10 + 7) << "";
-    }
-    out << "  " << joined(row.flags, ";") << "\n";
-  }
-  print_jumps(out, "up", curve.jumps_up);
-  print_jumps(out, "down", curve.jumps_down);
 }
 
 std::string prediction_text(const PredictionSetup& setup, const ResponseCurve& curve,

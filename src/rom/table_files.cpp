@@ -21,6 +21,18 @@ FileFormat file_format(const std::filesystem::path& file, const std::string& wha
 
 DamperTable read_damper_table(const std::filesystem::path& file) {
   const FileFormat format = file_format(file, "damper table");
+  std::error_code error;
+  if (std::filesystem::exists(file, error) && !std::filesystem::is_regular_file(file, error)) {
+    throw InputError("damper table '" + file.string() + "' is not a regular file");
+  }
+  // A characterisation grid holds hundreds of points (tens of kB); a file far larger is no
+  // table and is not read into memory.
+  constexpr std::uintmax_t most_bytes = 64u << 20;
+  const std::uintmax_t bytes = std::filesystem::file_size(file, error);
+  if (!error && bytes > most_bytes) {
+    throw InputError("damper table '" + file.string() + "' has " + std::to_string(bytes) +
+                     " bytes: a table file is at most 64 MiB");
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError("damper table '" + file.string() + "' cannot be read (does it exist?)");
   std::ostringstream text;

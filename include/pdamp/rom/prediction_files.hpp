@@ -1,11 +1,10 @@
 #pragma once
 /// The predicted response as rows (one per solution, and one per side where a solution lies
-/// outside the characterised amplitudes), written as CSV, JSON or an aligned text table
-/// (columns and units: docs/rom.md, "Prediction output").
+/// outside the characterised amplitudes), written as CSV or JSON (columns and units:
+/// docs/rom.md, "Prediction output").
 
 #include <filesystem>
 #include <optional>
-#include <ostream>
 #include <string>
 #include <vector>
 
@@ -37,8 +36,13 @@ std::vector<PredictionRow> prediction_rows(const PredictionSetup& setup, const R
 
 std::string prediction_csv(const PredictionSetup& setup, const ResponseCurve& curve);
 std::string prediction_json(const PredictionSetup& setup, const ResponseCurve& curve);
-/// The rows as an aligned table with a header and the sweeps' jumps, for the terminal.
-void print_prediction(std::ostream& out, const PredictionSetup& setup, const ResponseCurve& curve);
+
+/// "force F0 = 0.05 N", "base motion Y = 1e-04 m": the excitation in the files' headers.
+std::string excitation_text(const Excitation& excitation);
+/// "201 frequencies 14 to 22 Hz (linear)".
+std::string range_text(const FrequencyRange& range);
+/// The row's flags separated by ';', as in the CSV.
+std::string flags_text(const PredictionRow& row);
 
 /// The prediction's text in the format `file`'s extension names (.csv, .json); InputError otherwise.
 std::string prediction_text(const PredictionSetup& setup, const ResponseCurve& curve,

@@ -182,15 +182,7 @@ TEST_CASE("pdamp rom exports a table as CSV and JSON that read back to the same 
   CHECK(slurp(file("a.csv")) == slurp(file("b.csv")));
   CHECK(slurp(file("a.json")) == slurp(file("b.json")));
   // The committed table, written by Python, reads to the same numbers as its export.
-  const auto original = rom::read_damper_table(liftoff());
-  const auto exported = rom::read_damper_table(file("a.csv"));
-  CHECK(original.amplitudes_m == exported.amplitudes_m);
-  CHECK(original.frequencies_hz == exported.frequencies_hz);
-  REQUIRE(original.points.size() == exported.points.size());
-  for (std::size_t i = 0; i < original.points.size(); ++i) {
-    CHECK(original.points[i].m_app_kg == exported.points[i].m_app_kg);
-    CHECK(original.points[i].c_eq_N_s_m == exported.points[i].c_eq_N_s_m);
-  }
+  CHECK(rom::read_damper_table(file("a.csv")) == rom::read_damper_table(liftoff()));
 }
 
 TEST_CASE("pdamp rom: bad input exits 2 with the reason and writes nothing") {

@@ -20,6 +20,8 @@ struct DamperValues {
   /// were averaged (same units as the values).
   double m_app_spread_kg = 0.0;
   double c_eq_spread_N_s_m = 0.0;
+
+  bool operator==(const DamperValues&) const = default;
 };
 
 /// One characterised point of the grid.
@@ -27,6 +29,8 @@ struct TablePoint : DamperValues {
   /// The characterisation reached a steady state there. An unsettled point is still
   /// interpolated through, but every prediction that uses it carries the flag `unsettled`.
   bool settled = true;
+
+  bool operator==(const TablePoint&) const = default;
 };
 
 struct DamperTable {
@@ -47,6 +51,9 @@ struct DamperTable {
   }
   /// Γ = A (2πf)² / g at a grid point (infinite when g = 0).
   double gamma(std::size_t amplitude_index, std::size_t frequency_index) const;
+
+  /// Every field and value equal (a file read back to the table it was written from).
+  bool operator==(const DamperTable&) const = default;
 };
 
 /// Throws InputError naming the first problem, prefixed by `where` (a file name): fewer than

@@ -195,8 +195,9 @@ TEST_CASE("pdamp rom: bad input exits 2 with the reason and writes nothing") {
            "0.001,10,0.01,0,0,0,1\n0.01,10,0.01,0,0,0,1\n0.001,20,0.01,0,0,0,1\n";
   }
   std::filesystem::create_directory(input("folder.csv"));
+  std::filesystem::create_symlink("/dev/zero", input("zero.csv"));  // endless if it were read
   { std::ofstream huge(input("huge.csv")); }
-  std::filesystem::resize_file(input("huge.csv"), (64u << 20) + 1);  // sparse: no disk used
+  std::filesystem::resize_file(input("huge.csv"), rom::max_table_file_bytes + 1);  // sparse: no disk used
   const std::vector<std::string> force = {"--force", "0.05", "--freq", "14:22:50"};
   const std::vector<std::string> good = Args{"--table", liftoff()} + host + force;
   const std::vector<std::string> outputs = {"--out",          (dir / "p.csv").string(),
@@ -209,9 +210,10 @@ TEST_CASE("pdamp rom: bad input exits 2 with the reason and writes nothing") {
   const auto table = [](const std::string& file) { return Args{"--table", file}; };
   const Case cases[] = {
       {table(input("ragged.csv")) + host + force, "no point at A = 0.01 m, f = 20 Hz"},
-      {table(input("missing.csv")) + host + force, "cannot be read"},
-      {table(input("folder.csv")) + host + force, "is not a regular file"},
-      {table(input("huge.csv")) + host + force, "has 67108865 bytes: a table file is at most 64 MiB"},
+      {table(input("missing.csv")) + host + force, "missing.csv' cannot be read (no such file)"},
+      {table(input("folder.csv")) + host + force, "folder.csv' is a directory, not a regular file"},
+      {table(input("zero.csv")) + host + force, "zero.csv' is a device, not a regular file"},
+      {table(input("huge.csv")) + host + force, "is larger than 16777216 bytes, the most a damper table file may have"},
       {table(liftoff() + ".txt") + host + force, "name it .csv or .json"},
       {{"--mass", "0.0376"}, "--table is required"},
       {table(liftoff()) + Args{"--mass", "0", "--stiffness", "470"} + force, "host mass M (kg) = 0"},

@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cctype>
 #include <fstream>
-#include <sstream>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/input_file.hpp"
 
 namespace pdamp::rom {
 FileFormat file_format(const std::filesystem::path& file, const std::string& what) {
@@ -21,24 +21,10 @@ FileFormat file_format(const std::filesystem::path& file, const std::string& wha
 
 DamperTable read_damper_table(const std::filesystem::path& file) {
   const FileFormat format = file_format(file, "damper table");
-  std::error_code error;
-  if (std::filesystem::exists(file, error) && !std::filesystem::is_regular_file(file, error)) {
-    throw InputError("damper table '" + file.string() + "' is not a regular file");
-  }
-  // A characterisation grid holds hundreds of points (tens of kB); a file far larger is no
-  // table and is not read into memory.
-  constexpr std::uintmax_t most_bytes = 64u << 20;
-  const std::uintmax_t bytes = std::filesystem::file_size(file, error);
-  if (!error && bytes > most_bytes) {
-    throw InputError("damper table '" + file.string() + "' has " + std::to_string(bytes) +
-                     " bytes: a table file is at most 64 MiB");
-  }
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError("damper table '" + file.string() + "' cannot be read (does it exist?)");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return format == FileFormat::csv ? parse_damper_table_csv(text.str(), file.string())
-                                   : parse_damper_table_json(text.str(), file.string());
+  const std::string name = "damper table '" + file.string() + "'";
+  const std::string text = read_input_file({file, name, "a damper table file", max_table_file_bytes});
+  return format == FileFormat::csv ? parse_damper_table_csv(text, file.string())
+                                   : parse_damper_table_json(text, file.string());
 }
 
 std::string damper_table_text(const DamperTable& table, const std::filesystem::path& file) {

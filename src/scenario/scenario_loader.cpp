@@ -1,14 +1,8 @@
 #include "pdamp/scenario/scenario_loader.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <limits>
 #include <map>
@@ -19,6 +13,7 @@
 #include <string_view>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/input_file.hpp"
 #include "pdamp/model/cell_grid.hpp"
 #include "pdamp/model/placement.hpp"
 
@@ -580,57 +575,10 @@ Scenario parse_scenario(const std::string& text, const std::string& name, const 
   return build(raw, name);
 }
 
-namespace {
-
-/// Closes a file descriptor when it goes out of scope.
-struct OpenFile {
-  int fd;
-  ~OpenFile() {
-    if (fd >= 0) ::close(fd);
-  }
-};
-
-/// The whole of a scenario file: a regular file of at most max_scenario_file_bytes. Opened
-/// without blocking, so that a FIFO cannot hang the reader, and checked as opened, so that
-/// nothing can be swapped in between.
-std::string read_scenario_file(const std::filesystem::path& file) {
-  const std::string name = "scenario file '" + printable(file.string()) + "'";
-  const OpenFile in{::open(file.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC)};
-  auto cannot_read = [&](int error) {
-    return InputError(name + " cannot be read (" +
-                      (error == ENOENT   ? "no such file"
-                       : error == EACCES ? "permission denied"
-                                         : std::strerror(error)) +
-                      "); the paper's cases are in data/scenarios/");
-  };
-  struct stat status {};
-  if (in.fd < 0 || ::fstat(in.fd, &status) != 0) throw cannot_read(errno);
-  if (!S_ISREG(status.st_mode)) {
-    const char* kind = S_ISDIR(status.st_mode)    ? "a directory"
-                       : S_ISFIFO(status.st_mode) ? "a FIFO"
-                       : S_ISSOCK(status.st_mode) ? "a socket"
-                                                  : "a device";
-    throw InputError(name + " is " + kind + ", not a regular file");
-  }
-  std::string text;
-  char buffer[1 << 16];
-  for (;;) {
-    const ssize_t got = ::read(in.fd, buffer, sizeof buffer);
-    if (got < 0 && errno == EINTR) continue;
-    if (got < 0) throw cannot_read(errno);
-    if (got == 0) return text;
-    text.append(buffer, static_cast<std::size_t>(got));
-    if (text.size() > max_scenario_file_bytes) {
-      throw InputError(name + " is larger than " + std::to_string(max_scenario_file_bytes) +
-                       " bytes, the most a scenario file may have");
-    }
-  }
-}
-
-}  // namespace
-
 Scenario load_scenario(const std::filesystem::path& file, const ScenarioOverrides& overrides) {
-  return parse_scenario(read_scenario_file(file), file.stem().string(), file.string(), overrides);
+  const std::string text = read_input_file({file, "scenario file '" + printable(file.string()) + "'", "a scenario file",
+                                            max_scenario_file_bytes, "; the paper's cases are in data/scenarios/"});
+  return parse_scenario(text, file.stem().string(), file.string(), overrides);
 }
 
 void describe_scenario_keys(std::ostream& out) {

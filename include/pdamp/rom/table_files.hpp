@@ -3,6 +3,7 @@
 /// files"). Both read back to the same bits they were written from. Every reader validates the
 /// table and throws InputError naming the file, the line or field and the reason.
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 
@@ -27,7 +28,12 @@ enum class FileFormat { csv, json };
 /// The format `file`'s extension names (.csv or .json, any case); InputError naming `what` otherwise.
 FileFormat file_format(const std::filesystem::path& file, const std::string& what);
 
-/// Reads a table file, CSV or JSON by its extension (.csv, .json).
+/// The most a table file may hold (bytes): a characterisation grid of hundreds of points
+/// takes tens of kB.
+constexpr std::size_t max_table_file_bytes = 16 << 20;
+
+/// Reads a table file, CSV or JSON by its extension (.csv, .json): a regular file of at most
+/// max_table_file_bytes.
 DamperTable read_damper_table(const std::filesystem::path& file);
 
 /// The table's text in the format `file`'s extension names (.csv, .json); InputError otherwise.

@@ -65,6 +65,10 @@ void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
       << "\n  dissipated friction     " << format_optional(s->dissipated_friction_J) << " J"
       << "\n  dissipated viscous      " << format_optional(s->dissipated_viscous_J) << " J"
       << "\n  samples, cycles         " << s->n_samples << ", " << s->n_cycles << "\n";
+  if (const auto snapshots = store.snapshots(run_id)) {
+    out << "  snapshots               " << snapshots->frames << " frames every " << snapshots->interval_s
+        << " s: " << printable(snapshots->collection) << "\n";
+  }
   for (const auto& [name, value] : store.statistics(run_id)) {
     out << "  " << std::left << std::setw(28) << name << std::right << value << "\n";
   }
@@ -152,11 +156,11 @@ int exit_code(const StoredRun& run) {
 }  // namespace
 
 int run_command(const ScenarioRequest& request, const std::string& model_name, const std::filesystem::path& db,
-                bool terminal) {
+                const std::optional<SnapshotSettings>& snapshots, bool terminal) {
   // Everything that can be wrong with the input is found before the store is touched.
   const Model model = parse_model(model_name);
   const Scenario scenario = load_scenario(request.file, request.overrides);
-  const RunPlan plan = plan_run(model, scenario);
+  const RunPlan plan = plan_run(model, scenario, snapshots);
 
   RunStore store(db);
   install_stop_handlers();
@@ -206,9 +210,10 @@ void print_comparison(RunStore& store, std::int64_t id, const ComparisonRecord& 
 
 }  // namespace
 
-int compare_command(const ScenarioRequest& request, const std::filesystem::path& db, bool terminal) {
+int compare_command(const ScenarioRequest& request, const std::filesystem::path& db,
+                    const std::optional<SnapshotSettings>& snapshots, bool terminal) {
   const Scenario scenario = load_scenario(request.file, request.overrides);
-  const RunPlan plans[2] = {plan_run(Model::soft, scenario), plan_run(Model::hard, scenario)};
+  const RunPlan plans[2] = {plan_run(Model::soft, scenario, snapshots), plan_run(Model::hard, scenario, snapshots)};
 
   RunStore store(db);
   install_stop_handlers();

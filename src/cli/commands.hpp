@@ -2,10 +2,12 @@
 /// The CLI's commands, each returning the process exit code.
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/sim/snapshots.hpp"
 
 namespace pdamp {
 
@@ -16,13 +18,14 @@ struct ScenarioRequest {
 
 /// `terminal`: whether stderr is one (progress redrawn in place) or a log (a line now and then).
 int run_command(const ScenarioRequest& request, const std::string& model, const std::filesystem::path& db,
-                bool terminal);
+                const std::optional<SnapshotSettings>& snapshots, bool terminal);
 int list_runs_command(const std::filesystem::path& db);
 int show_run_command(const std::string& run_id, const std::filesystem::path& db);
 /// `force`: also runs still marked running.
 int delete_runs_command(const std::vector<std::string>& run_ids, const std::filesystem::path& db, bool force);
 int check_command(const ScenarioRequest& request);
-int compare_command(const ScenarioRequest& request, const std::filesystem::path& db, bool terminal);
+int compare_command(const ScenarioRequest& request, const std::filesystem::path& db,
+                    const std::optional<SnapshotSettings>& snapshots, bool terminal);
 /// Sets the number of threads (--threads); throws InputError unless it is 1 to 1024.
 void set_thread_count(const std::string& text);
 

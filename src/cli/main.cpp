@@ -13,6 +13,7 @@
 
 #include "commands.hpp"
 #include "pdamp/errors.hpp"
+#include "pdamp/sim/snapshots.hpp"
 #include "pdamp/soft/simd_path.hpp"
 #include "pdamp/version.hpp"
 #include "rom_command.hpp"
@@ -27,12 +28,13 @@ constexpr const char* usage =
     "\n"
     "commands:\n"
     "  run     --scenario FILE --model soft|hard [--set k=v ...] [--db FILE] [--duration S]\n"
-    "          simulate a scenario and store the run\n"
+    "          [--snapshots EVERY_S [--snapshot-dir DIR]]\n"
+    "          simulate a scenario and store the run (and snapshots for ParaView)\n"
     "  runs    [--db FILE]            list the stored runs\n"
     "  show    RUN_ID [--db FILE]     summary of one run\n"
     "  delete  RUN_ID... [--db FILE] [--force]\n"
     "          delete runs with their samples, cycles, statistics and comparisons\n"
-    "  compare --scenario FILE [--set k=v ...] [--db FILE] [--duration S]\n"
+    "  compare --scenario FILE [--set k=v ...] [--db FILE] [--duration S] [--snapshots EVERY_S ...]\n"
     "          settle one bed, run both models from it, store both and their comparison\n"
     "  check   --scenario FILE [--set k=v ...]\n"
     "          validate a scenario and print every key with its resolved value\n"
@@ -67,6 +69,16 @@ po::options_description db_option() {
   return o;
 }
 
+po::options_description snapshot_options() {
+  po::options_description o("snapshots for ParaView (docs/snapshots.md)");
+  o.add_options()("snapshots", po::value<std::string>()->value_name("EVERY_S"),
+                  "write the spheres and the cavity as VTK files every EVERY_S s of simulated time, listed in one .pvd "
+                  "per run")("snapshot-dir", po::value<std::string>()->value_name("DIR"),
+                             "folder of the snapshots, each run's in DIR/run-<id>/ (default: beside the store, "
+                             "named after it: pdamp.snapshots for pdamp.sqlite)");
+  return o;
+}
+
 struct CommandLine {
   po::variables_map vm;
   ScenarioOverrides overrides;  ///< --set and --duration, in the order given
@@ -96,6 +108,17 @@ std::string required(const po::variables_map& vm, const std::string& name, const
   return vm[name].as<std::string>();
 }
 
+/// --snapshots and --snapshot-dir, if given (checked against the scenario by plan_run).
+std::optional<SnapshotSettings> snapshot_request(const po::variables_map& vm) {
+  if (!vm.count("snapshots")) {
+    if (vm.count("snapshot-dir")) throw InputError("--snapshot-dir needs --snapshots EVERY_S");
+    return std::nullopt;
+  }
+  return parse_snapshot_settings(vm["snapshots"].as<std::string>(),
+                                 vm.count("snapshot-dir") ? vm["snapshot-dir"].as<std::string>() : std::string(),
+                                 default_snapshot_directory(vm["db"].as<std::string>()));
+}
+
 ScenarioRequest scenario_request(const CommandLine& line, const std::string& command) {
   return {required(line.vm, "scenario", command), line.overrides};
 }
@@ -106,7 +129,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
 
   if (command == "run") {
     po::options_description options("pdamp run --scenario FILE --model soft|hard [options]");
-    options.add(help).add(scenario_options()).add(duration_option()).add(db_option());
+    options.add(help).add(scenario_options()).add(duration_option()).add(db_option()).add(snapshot_options());
     options.add_options()("model", po::value<std::string>(), "soft (Hertz DEM) or hard (event-driven)")(
         "threads", po::value<std::string>(),
         "threads for the soft engine (default: one per core); results are the same bits for any number")(
@@ -124,11 +147,12 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
     if (vm.count("simd"))
       soft::set_default_simd_path(soft::parse_simd_path(vm["simd"].as<std::string>(), "--simd"), "--simd");
-    return run_command(request, required(vm, "model", command), vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0);
+    return run_command(request, required(vm, "model", command), vm["db"].as<std::string>(), snapshot_request(vm),
+                       isatty(STDERR_FILENO) != 0);
   }
   if (command == "compare") {
     po::options_description options("pdamp compare --scenario FILE [options]");
-    options.add(help).add(scenario_options()).add(duration_option()).add(db_option());
+    options.add(help).add(scenario_options()).add(duration_option()).add(db_option()).add(snapshot_options());
     options.add_options()("threads", po::value<std::string>(), "threads for the soft engine (default: one per core)");
     const CommandLine line = parse(args, options);
     const po::variables_map& vm = line.vm;
@@ -138,7 +162,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     }
     const ScenarioRequest request = scenario_request(line, command);
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
-    return compare_command(request, vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0);
+    return compare_command(request, vm["db"].as<std::string>(), snapshot_request(vm), isatty(STDERR_FILENO) != 0);
   }
   if (command == "runs") {
     po::options_description options("pdamp runs [--db FILE]");

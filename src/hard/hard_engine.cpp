@@ -80,6 +80,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       contact_tolerance_m_(relative_contact_tolerance * initial.radius_m.minCoeff()),
       max_radius_m_(initial.max_radius_m()),
       host_(host_model_, 0.0, host_model_.initial_state()),
+      by_sphere_{Eigen::VectorXd::Zero(initial.size()), Eigen::VectorXd::Zero(initial.size())},
       max_events_(scenario.run.max_events),
       next_poll_(std::min(poll_interval, max_events_ + 1)) {
   host_speed_envelope_m_s_ = 2.0 * host_.speed_bound_m_s();
@@ -732,6 +733,8 @@ void HardEngine::collide_spheres(int i, int j) {
   particles_.angular_velocity_rad_s.col(j) += rj * torque_arm / particles_.moment_of_inertia(j);
   impact_J_ += out.impact_J;
   friction_J_ += out.friction_J;
+  book_sphere_loss(i, 0.5 * out.impact_J, 0.5 * out.friction_J);
+  book_sphere_loss(j, 0.5 * out.impact_J, 0.5 * out.friction_J);
   new_trajectory(i);
   new_trajectory(j);
   predict(i, around_i);
@@ -858,15 +861,19 @@ void HardEngine::merge_rigidly(const std::vector<int>& members) {
       total += reduced * u.squaredNorm();
     }
   }
+  const double impact_share = total > 0.0 ? normal / total : 1.0;
   double loss = 0.0;
   for (const int k : members) {
+    // Each sphere's part of the loss is the energy of its own motion removed.
     const Eigen::Vector3d v = velocity + spin.cross(particles_.position_m.col(k) - centre);
-    loss += 0.5 * particles_.mass_kg[k] * (particles_.velocity_m_s.col(k) - v).squaredNorm() +
-            0.5 * particles_.moment_of_inertia(k) * (particles_.angular_velocity_rad_s.col(k) - spin).squaredNorm();
+    const double sphere_loss =
+        0.5 * particles_.mass_kg[k] * (particles_.velocity_m_s.col(k) - v).squaredNorm() +
+        0.5 * particles_.moment_of_inertia(k) * (particles_.angular_velocity_rad_s.col(k) - spin).squaredNorm();
+    loss += sphere_loss;
+    book_sphere_loss(k, impact_share * sphere_loss, (1.0 - impact_share) * sphere_loss);
     particles_.velocity_m_s.col(k) = v;
     particles_.angular_velocity_rad_s.col(k) = spin;
   }
-  const double impact_share = total > 0.0 ? normal / total : 1.0;
   impact_J_ += impact_share * loss;
   friction_J_ += (1.0 - impact_share) * loss;
 }
@@ -905,6 +912,14 @@ void HardEngine::stick_to_host(const std::vector<int>& members, std::uint8_t hol
   impact_J_ += (side ? horizontal_J : 0.0) + (cap ? vertical_J : 0.0);
   friction_J_ += spin_J + (side ? 0.0 : horizontal_J) + (cap ? 0.0 : vertical_J);
   for (const int k : members) {
+    // Each sphere's part: its own spin and motion relative to the body, and its mass's
+    // share of the body's.
+    const double m = particles_.mass_kg[k], share = m / mass;
+    const double sphere_spin_J =
+        0.5 * m * (particles_.velocity_m_s.col(k) - velocity).squaredNorm() +
+        0.5 * particles_.moment_of_inertia(k) * particles_.angular_velocity_rad_s.col(k).squaredNorm();
+    book_sphere_loss(k, share * ((side ? horizontal_J : 0.0) + (cap ? vertical_J : 0.0)),
+                     sphere_spin_J + share * ((side ? 0.0 : horizontal_J) + (cap ? 0.0 : vertical_J)));
     particles_.velocity_m_s.col(k) = after.v_m_s * e_z;
     particles_.angular_velocity_rad_s.col(k).setZero();
     leave_host_sets(k);
@@ -916,8 +931,8 @@ double HardEngine::host_inverse_mass_1_kg() const {
   return host_model_.has_infinite_mass() ? 0.0 : 1.0 / (host_model_.mass_kg() + riding_mass_kg_);
 }
 
-void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out,
-                                    const HostState& host) {
+void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out, const HostState& host,
+                                    int rider) {
   const Eigen::Vector3d& p = out.impulse_N_s;
   const double r = particles_.radius_m[i];
   particles_.velocity_m_s.col(i) += p / particles_.mass_kg[i];
@@ -925,6 +940,12 @@ void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const Colli
       r * n.cross(p) / particles_.moment_of_inertia(static_cast<Eigen::Index>(i));
   impact_J_ += out.impact_J;
   friction_J_ += out.friction_J;
+  if (rider < 0) {
+    book_sphere_loss(i, out.impact_J, out.friction_J);
+  } else {
+    book_sphere_loss(i, 0.5 * out.impact_J, 0.5 * out.friction_J);
+    book_sphere_loss(rider, 0.5 * out.impact_J, 0.5 * out.friction_J);
+  }
   new_trajectory(i);
   leave_host_sets(i);
   if (host_model_.has_infinite_mass()) {
@@ -1015,7 +1036,7 @@ void HardEngine::collide_rider(int i, int j) {
   const Mobility mobility = sphere_mobility(particles_.mass_kg[i]) + Mobility{0, 0, host_inverse_mass_1_kg()};
   const HardContactLaw law = law_for(approach, false, i, -1);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
-  apply_host_impulse(i, n, out, host);
+  apply_host_impulse(i, n, out, host, j);
   rest_if_slow(i, -n, host_.at(t_s_));
 }
 
@@ -1146,17 +1167,22 @@ void HardEngine::attach(int i) {
   const double relative_vz = v.z() - host.v_m_s;
   // A perfectly inelastic, sticking collision with the host: the normal part of the loss
   // is impact, the sliding and spinning that stop are friction.
-  friction_J_ += 0.5 * m * (v.x() * v.x() + v.y() * v.y()) +
-                 0.5 * particles_.moment_of_inertia(i) * particles_.angular_velocity_rad_s.col(i).squaredNorm();
+  const double friction_J =
+      0.5 * m * (v.x() * v.x() + v.y() * v.y()) +
+      0.5 * particles_.moment_of_inertia(i) * particles_.angular_velocity_rad_s.col(i).squaredNorm();
   HostState after = host;
+  double impact_J;
   if (host_model_.has_infinite_mass()) {
-    impact_J_ += 0.5 * m * relative_vz * relative_vz;
+    impact_J = 0.5 * m * relative_vz * relative_vz;
     excitation_J_ += m * (host.v_m_s - v.z()) * host.v_m_s;
   } else {
     const double carried = host_model_.mass_kg() + riding_mass_kg_;
-    impact_J_ += 0.5 * m * carried / (m + carried) * relative_vz * relative_vz;
+    impact_J = 0.5 * m * carried / (m + carried) * relative_vz * relative_vz;
     after.v_m_s = (carried * host.v_m_s + m * v.z()) / (carried + m);
   }
+  friction_J_ += friction_J;
+  impact_J_ += impact_J;
+  book_sphere_loss(i, impact_J, friction_J);
   const Eigen::Vector3d lab_position = particles_.position_m.col(i);
   free_cells_.remove(i);
   leave_host_sets(i);

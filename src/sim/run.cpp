@@ -20,6 +20,12 @@ double observation_interval_s(const Scenario& scenario) {
   return std::min(scenario.run.sample_interval_s, 2.0 * std::numbers::pi / fastest / 256.0);
 }
 
+ObservationGrid observation_grid(const Scenario& scenario) {
+  const double sample_interval = scenario.run.sample_interval_s;
+  const auto steps = static_cast<long>(std::ceil(sample_interval / observation_interval_s(scenario) - 1e-9));
+  return {steps, sample_interval / static_cast<double>(steps)};
+}
+
 CycleAnalyzer make_cycle_analyzer(const Scenario& scenario, const Particles& bed) {
   const double g_z = scenario.gravity_m_s2.z();
   const double equilibrium_z =
@@ -50,11 +56,7 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
   RunOutcome outcome;
   const double duration = scenario.run.duration_s;
   const double sample_interval = scenario.run.sample_interval_s;
-  // Observation times are j·h inside each sample interval k·Δ, computed from integers so
-  // that samples fall exactly on multiples of Δ.
-  const auto observations_per_sample =
-      static_cast<long>(std::ceil(sample_interval / observation_interval_s(scenario) - 1e-9));
-  const double h = sample_interval / static_cast<double>(observations_per_sample);
+  const auto [observations_per_sample, h] = observation_grid(scenario);
 
   auto interrupted = [&] {
     outcome.status = RunStatus::interrupted;
@@ -80,6 +82,7 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
       outcome.sim_time_s = now.t_s;
     };
     record(true);
+    if (control.at_observation) control.at_observation(engine, {0, true});
     for (long k = 0; now.t_s < duration; ++k) {
       for (long j = 1; j <= observations_per_sample && now.t_s < duration; ++j) {
         const double t = j == observations_per_sample
@@ -90,6 +93,9 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
         now = engine.observe();
         require_finite(now);
         record(j == observations_per_sample || target == duration);
+        if (control.at_observation) {
+          control.at_observation(engine, {k * observations_per_sample + j, t - target <= 1e-9 * h});
+        }
         if (control.stop && control.stop->load()) {
           interrupted();
           break;

@@ -26,6 +26,18 @@ std::unique_ptr<Engine> start_engine(RunStore& store, std::int64_t run_id, const
   return engine;
 }
 
+SnapshotRecord snapshot_record(const SnapshotWriter& writer, const SnapshotSettings& settings) {
+  return {writer.files().folder.string(), writer.files().collection.string(), settings.interval_s, writer.frames()};
+}
+
+/// Makes the run's snapshot folder and records it in the store, before the bed is settled:
+/// a run that fails later leaves its folder recorded.
+std::optional<SnapshotWriter> start_snapshots(RunStore& store, std::int64_t run_id, const RunPlan& plan) {
+  std::optional<SnapshotWriter> writer(std::in_place, *plan.snapshots, *plan.scenario, run_id);
+  store.save_snapshots(run_id, snapshot_record(*writer, *plan.snapshots));
+  return writer;
+}
+
 void store_engine_statistics(RunStore& store, std::int64_t run_id, const Engine& engine) {
   EngineStatistics statistics = engine.statistics();
   statistics.emplace_back("threads", omp_get_max_threads());
@@ -37,9 +49,10 @@ void store_engine_statistics(RunStore& store, std::int64_t run_id, const Engine&
 
 }  // namespace
 
-RunPlan plan_run(Model model, const Scenario& scenario) {
+RunPlan plan_run(Model model, const Scenario& scenario, const std::optional<SnapshotSettings>& snapshots) {
   check_model_can_run(model, scenario);
-  RunPlan plan{model, &scenario, std::nullopt};
+  if (snapshots) check_snapshot_settings(*snapshots, scenario);
+  RunPlan plan{model, &scenario, std::nullopt, snapshots};
   if (model == Model::hard && scenario.hard_restitution == HardRestitution::calibrated &&
       scenario.particles.count > 0) {
     try {
@@ -59,7 +72,9 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
   result.run_id = store.begin_run({std::string(to_string(plan.model)), scenario.name, scenario.canonical_text,
                                    scenario.particles.seed, scenario.particles.count, scenario.run.duration_s});
   std::unique_ptr<Engine> engine;
+  std::optional<SnapshotWriter> snapshots;
   try {
+    if (plan.snapshots) snapshots = start_snapshots(store, result.run_id, plan);
     engine = start_engine(store, result.run_id, plan, bed);
   } catch (const Interrupted& e) {
     result.outcome.status = RunStatus::interrupted;
@@ -71,7 +86,14 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
   if (engine) {
     {
       RunWriter writer(store, result.run_id);
-      result.outcome = run_simulation(*engine, scenario, writer, control);
+      RunControl with_snapshots = control;
+      if (snapshots) {
+        with_snapshots.at_observation = [&](const Engine& e, const ObservationStep& step) {
+          if (control.at_observation) control.at_observation(e, step);
+          snapshots->at_observation(e, step);
+        };
+      }
+      result.outcome = run_simulation(*engine, scenario, writer, with_snapshots);
     }
     for (const auto& warning : engine->warnings()) {
       if (warn) warn(warning);
@@ -81,6 +103,7 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
   } else {
     result.outcome.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   }
+  if (snapshots) store.save_snapshots(result.run_id, snapshot_record(*snapshots, *plan.snapshots));
   store.finish_run(result.run_id, result.outcome);
   return result;
 }

@@ -149,7 +149,7 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
   v_.assign(n);
   w_.assign(n);
   for (SphereVectors* field : {&force_, &torque_, &x_at_rebuild_}) field->assign(n, 0.0);
-  mass_.assign(n, 0.0);
+  for (SphereScalars* field : {&mass_, &impact_J_, &friction_J_}) field->assign(n, 0.0);
   original_index_.resize(n);
   for (int i = 0; i < n; ++i) {
     balls_[i] = {initial.position_m(0, i), initial.position_m(1, i), initial.position_m(2, i), initial.radius_m[i]};
@@ -175,6 +175,8 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
   // E(0); nothing has been dissipated yet.
   ledger_.dissipated_impact_J = ledger_.dissipated_friction_J = ledger_.dissipated_viscous_J = 0.0;
   ledger_.excitation_work_J = 0.0;
+  impact_J_.assign(n, 0.0);
+  friction_J_.assign(n, 0.0);
 }
 
 void SoftEngine::advance_to(double t_s) {
@@ -368,6 +370,8 @@ void SoftEngine::reorder_spheres(const std::vector<int>& order) {
   permute(v_, order, visited_);
   permute(w_, order, visited_);
   permute(mass_, order, visited_);
+  permute(impact_J_, order, visited_);
+  permute(friction_J_, order, visited_);
   for (std::vector<int>* indices :
        {&original_index_, &wall_contacts_[side], &wall_contacts_[bottom], &wall_contacts_[top]}) {
     permute(*indices, order, visited_);
@@ -481,12 +485,12 @@ void SoftEngine::force_chunk(int c, double dt_s) {
   std::vector<Reaction>& reactions = reactions_[c];
   if (reactions.capacity() < static_cast<std::size_t>(pairs)) reactions.reserve(pairs + pairs / 8);
   reactions.resize(pairs);
-  int touching_pairs = 0;
+  int reaction_count = 0;
   for (int p = 0; p < pairs; p += lanes) {
     add_pair_contacts<Real>(scratch.pairs.data() + p, std::min(lanes, pairs - p), dt_s, c, totals, on_chunk,
-                            reactions.data(), touching_pairs);
+                            reactions.data(), reaction_count);
   }
-  reactions.resize(touching_pairs);
+  reactions.resize(reaction_count);
   const std::array<int, 3> at_walls = list_wall_contacts_to_evaluate<Real>(first, end, scratch.wall_spheres);
   auto add_contacts_with = [&]<int wall>(std::integral_constant<int, wall>) [[gnu::always_inline]] {
     const int* const spheres = scratch.wall_spheres[wall].data();
@@ -504,6 +508,10 @@ void SoftEngine::force_chunk(int c, double dt_s) {
   std::copy_n(on_chunk.tx, size, torque_.x.data() + first);
   std::copy_n(on_chunk.ty, size, torque_.y.data() + first);
   std::copy_n(on_chunk.tz, size, torque_.z.data() + first);
+  for (int slot = 0; slot < size; ++slot) {
+    impact_J_[first + slot] += on_chunk.impact_J[slot];
+    friction_J_[first + slot] += on_chunk.friction_J[slot];
+  }
   chunk_totals_[c] = totals;
 }
 
@@ -522,6 +530,8 @@ void SoftEngine::start_forces(int first, int end, ChunkWrenches& on_chunk) const
       store(on_chunk.tx + slot, R{});
       store(on_chunk.ty + slot, R{});
       store(on_chunk.tz + slot, R{});
+      store(on_chunk.impact_J + slot, R{});
+      store(on_chunk.friction_J + slot, R{});
     });
     return;
   }
@@ -534,6 +544,7 @@ void SoftEngine::start_forces(int first, int end, ChunkWrenches& on_chunk) const
     on_chunk.tx[slot] = spin_drag * w_[i].x;
     on_chunk.ty[slot] = spin_drag * w_[i].y;
     on_chunk.tz[slot] = spin_drag * w_[i].z;
+    on_chunk.impact_J[slot] = on_chunk.friction_J[slot] = 0.0;
   }
 }
 
@@ -588,7 +599,7 @@ std::array<int, 3> SoftEngine::list_wall_contacts_to_evaluate(int first, int end
 
 template <class Real>
 void SoftEngine::add_pair_contacts(const int* pairs, int count, double dt_s, int c, ChunkTotals& totals,
-                                   ChunkWrenches& on_chunk, Reaction* reactions, int& touching_pairs) {
+                                   ChunkWrenches& on_chunk, Reaction* reactions, int& reaction_count) {
   constexpr int lanes = lane_count<Real>;
   ContactTable& contacts = contact_tables_[c];
   const int first = c * chunk_size;
@@ -619,9 +630,14 @@ void SoftEngine::add_pair_contacts(const int* pairs, int count, double dt_s, int
   for_each_lane<Real>([&](auto l) [[gnu::always_inline]] {
     if (l >= count) return;
     const bool touches = (touching >> l) & 1;
-    book_contact(f, torque_on_i, h, l, touches, lane(overlap_ratio, l), neighbours_.contact(pairs[l]), contacts, totals,
-                 on_chunk, i[l] - first);
-    if (touches) reactions[touching_pairs++] = {-lane(f.force_N, l), lane(torque_on_j, l), j[l]};
+    book_contact(f, torque_on_i, h, l, touches, lane(overlap_ratio, l), 0.5, neighbours_.contact(pairs[l]), contacts,
+                 totals, on_chunk, i[l] - first);
+    reactions[reaction_count++] = {-lane(f.force_N, l),
+                                   lane(torque_on_j, l),
+                                   0.5 * lane(f.dissipated_normal_J, l),
+                                   0.5 * lane(f.dissipated_tangential_J, l),
+                                   j[l],
+                                   touches};
   });
 }
 
@@ -667,8 +683,8 @@ void SoftEngine::add_wall_contacts(const int* spheres, int count, double dt_s, i
   // Booked in a loop, not unrolled per lane as for pairs: wall contacts are fewer, and
   // three unrolled copies would be much of the kernel's code.
   for (int l = 0; l < count; ++l) {
-    book_contact(f, torque, h, l, (touching >> l) & 1, lane(overlap_ratio, l), wall_contacts_[wall][i[l]], contacts,
-                 totals, on_chunk, i[l] - first);
+    book_contact(f, torque, h, l, (touching >> l) & 1, lane(overlap_ratio, l), 1.0, wall_contacts_[wall][i[l]],
+                 contacts, totals, on_chunk, i[l] - first);
     totals.on_host_N -= lane(f.force_N.z, l);
   }
 }
@@ -685,8 +701,8 @@ ContactHistory<Real> SoftEngine::gather_histories(const ContactTable& contacts, 
 
 template <class Real>
 void SoftEngine::book_contact(const ContactForce<Real>& f, const Vec3<Real>& torque, const ContactHistory<Real>& h,
-                              int l, bool touching, double overlap_ratio, int& open, ContactTable& contacts,
-                              ChunkTotals& totals, ChunkWrenches& on_chunk, int slot) {
+                              int l, bool touching, double overlap_ratio, double loss_share, int& open,
+                              ContactTable& contacts, ChunkTotals& totals, ChunkWrenches& on_chunk, int slot) {
   const Vec3<double> force = lane(f.force_N, l), on_sphere = lane(torque, l);
   on_chunk.fx[slot] += force.x;
   on_chunk.fy[slot] += force.y;
@@ -694,8 +710,11 @@ void SoftEngine::book_contact(const ContactForce<Real>& f, const Vec3<Real>& tor
   on_chunk.tx[slot] -= on_sphere.x;
   on_chunk.ty[slot] -= on_sphere.y;
   on_chunk.tz[slot] -= on_sphere.z;
-  totals.impact_J += lane(f.dissipated_normal_J, l);
-  totals.friction_J += lane(f.dissipated_tangential_J, l);
+  const double impact_J = lane(f.dissipated_normal_J, l), friction_J = lane(f.dissipated_tangential_J, l);
+  totals.impact_J += impact_J;
+  totals.friction_J += friction_J;
+  on_chunk.impact_J[slot] += loss_share * impact_J;
+  on_chunk.friction_J[slot] += loss_share * friction_J;
   totals.elastic_J += lane(f.elastic_J, l);
   if (touching) {
     if (open == ContactTable::none) open = contacts.open();
@@ -717,6 +736,9 @@ void SoftEngine::add_reactions() {
       if (farthest_partner_[c] < begin) continue;
       for (const Reaction& r : reactions_[c]) {
         if (r.partner < begin || r.partner >= end) continue;
+        impact_J_[r.partner] += r.impact_J;
+        friction_J_[r.partner] += r.friction_J;
+        if (!r.touching) continue;
         force_.x[r.partner] += r.force_N.x;
         force_.y[r.partner] += r.force_N.y;
         force_.z[r.partner] += r.force_N.z;
@@ -810,6 +832,15 @@ State SoftEngine::state() const {
     s.particles.mass_kg[k] = mass_[i];
   }
   return s;
+}
+
+SphereDissipation SoftEngine::dissipation_by_sphere() const {
+  SphereDissipation d{Eigen::VectorXd(sphere_count()), Eigen::VectorXd(sphere_count())};
+  for (int i = 0; i < sphere_count(); ++i) {
+    d.impact_J[original_index_[i]] = impact_J_[i];
+    d.friction_J[original_index_[i]] = friction_J_[i];
+  }
+  return d;
 }
 
 EngineStatistics SoftEngine::statistics() const {

@@ -392,6 +392,22 @@ std::int64_t RunStore::save_comparison(const ComparisonRecord& c) {
   });
 }
 
+void RunStore::save_snapshots(std::int64_t run_id, const SnapshotRecord& s) {
+  sqlite::write_transaction(*db_, [&] {
+    sqlite::Statement upsert(*db_,
+                             "INSERT OR REPLACE INTO run_snapshots (run_id, folder, collection, interval_s, frames) "
+                             "VALUES (?, ?, ?, ?, ?)");
+    upsert.bind(1, run_id).bind(2, s.folder).bind(3, s.collection).bind(4, s.interval_s).bind(5, s.frames).run();
+  });
+}
+
+std::optional<SnapshotRecord> RunStore::snapshots(std::int64_t run_id) {
+  sqlite::Statement query(*db_, "SELECT folder, collection, interval_s, frames FROM run_snapshots WHERE run_id = ?");
+  query.bind(1, run_id);
+  if (!query.step()) return std::nullopt;
+  return SnapshotRecord{query.column_text(0), query.column_text(1), query.column_double(2), query.column_int(3)};
+}
+
 std::vector<RunSummary> RunStore::list_runs() {
   sqlite::Statement query(*db_, std::string(summary_columns) + " ORDER BY run_id");
   std::vector<RunSummary> runs;

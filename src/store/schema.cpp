@@ -263,8 +263,20 @@ SELECT 'runs', coalesce(max(id), 0) FROM (
   UNION ALL SELECT max(hard_run_id) FROM comparisons);
 )sql";
 
-constexpr std::array<std::string_view, 6> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
-                                              v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused};
+/// Where a run's snapshots for ParaView are (docs/snapshots.md).
+constexpr std::string_view v7_run_snapshots = R"sql(
+CREATE TABLE run_snapshots (
+  run_id      INTEGER PRIMARY KEY REFERENCES runs (run_id) ON DELETE CASCADE,
+  folder      TEXT NOT NULL,                          -- the run's folder, absolute
+  collection  TEXT NOT NULL,                          -- the .pvd in it, which ParaView opens
+  interval_s  REAL NOT NULL CHECK (interval_s > 0),   -- simulated time between frames
+  frames      INTEGER NOT NULL CHECK (frames >= 0)    -- frames written (0 until the run ends)
+) STRICT;
+)sql";
+
+constexpr std::array<std::string_view, 7> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
+                                              v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused,
+                                              v7_run_snapshots};
 
 }  // namespace
 

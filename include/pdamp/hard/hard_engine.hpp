@@ -64,6 +64,7 @@ class HardEngine final : public Engine {
   void advance_to(double t_s) override;
   Observation observe() const override;
   State state() const override;
+  SphereDissipation dissipation_by_sphere() const override { return by_sphere_; }
   double time_step_s() const override { return 0.0; }
   EngineStatistics statistics() const override;
   std::vector<std::string> warnings() const override;
@@ -175,8 +176,10 @@ class HardEngine final : public Engine {
   void release_bed();
 
   // The host and the bed.
-  /// A sphere-host collision outcome applied to sphere i (arm r n) and the host.
-  void apply_host_impulse(int i, const Eigen::Vector3d& normal, const CollisionOutcome& outcome, const HostState& host);
+  /// A sphere-host collision outcome applied to sphere i (arm r n) and the host; its loss
+  /// is shared with `rider` if a riding sphere took the impulse for the host.
+  void apply_host_impulse(int i, const Eigen::Vector3d& normal, const CollisionOutcome& outcome, const HostState& host,
+                          int rider = -1);
   void restart_host(HostState start);
   void book_host(double t_s);
   double rider_energy_J(const HostState& host) const;
@@ -304,6 +307,13 @@ class HardEngine final : public Engine {
 
   // Ledger (J).
   double impact_J_ = 0.0, friction_J_ = 0.0, viscous_J_ = 0.0, excitation_J_ = 0.0;
+  /// The impact and friction losses by sphere (dissipation_by_sphere).
+  SphereDissipation by_sphere_;
+  /// Adds a loss (J) to sphere i's share (the ledger's totals are booked apart).
+  void book_sphere_loss(int i, double impact_J, double friction_J) {
+    by_sphere_.impact_J[i] += impact_J;
+    by_sphere_.friction_J[i] += friction_J;
+  }
 
   struct Statistics {
     std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,

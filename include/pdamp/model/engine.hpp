@@ -28,6 +28,9 @@ class Engine {
   virtual void advance_to(double t_s) = 0;
   virtual Observation observe() const = 0;
   virtual State state() const = 0;
+  /// Each sphere's share of the ledger's impact and friction losses so far (with state(),
+  /// what a picture of the bed shows).
+  virtual SphereDissipation dissipation_by_sphere() const = 0;
   /// The time step the engine uses (s), or 0 for an event-driven engine.
   virtual double time_step_s() const = 0;
   virtual EngineStatistics statistics() const { return {}; }

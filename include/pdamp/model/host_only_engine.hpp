@@ -15,6 +15,7 @@ class HostOnlyEngine final : public Engine {
   void advance_to(double t_s) override;
   Observation observe() const override;
   State state() const override;
+  SphereDissipation dissipation_by_sphere() const override { return {}; }
   double time_step_s() const override { return 0.0; }
 
  private:

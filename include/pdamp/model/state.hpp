@@ -30,4 +30,13 @@ struct State {
   Particles particles;
 };
 
+/// The energy each sphere has dissipated since t = 0 (J), by mechanism, in the scenario's
+/// order: a sphere–sphere contact's loss half to each sphere, a wall's (or the host's)
+/// all to the sphere. Summed over the spheres, each equals the ledger's
+/// dissipated_impact_J or dissipated_friction_J (up to rounding).
+struct SphereDissipation {
+  Eigen::VectorXd impact_J;
+  Eigen::VectorXd friction_J;
+};
+
 }  // namespace pdamp

@@ -3,6 +3,7 @@
 /// analysis, records samples and cycles, and stops cleanly when asked.
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <string_view>
@@ -14,9 +15,20 @@
 
 namespace pdamp {
 
+/// Where an observation falls on the run loop's grid of observation steps (ObservationGrid).
+struct ObservationStep {
+  std::int64_t index = 0;  ///< steps since t = 0: the engine is at index × step_s
+  /// false for the run's last observation if the duration ends between two steps (the
+  /// engine is then at the duration, before step `index`)
+  bool on_grid = true;
+};
+
 struct RunControl {
   const std::atomic<bool>* stop = nullptr;   ///< when it becomes true the run ends as interrupted
   std::function<void(double t_s)> progress;  ///< called about twice a second of wall time
+  /// Called at every observation, t = 0 included, after it is recorded, with the engine as
+  /// it is then (snapshots). An exception ends the run as failed with its message.
+  std::function<void(const Engine& engine, const ObservationStep& step)> at_observation;
 };
 
 /// How the run ended, as the store keeps it, and what it recorded.
@@ -33,6 +45,15 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
 /// How often the run loop observes the engine (s): ≥ 256 times per natural period of
 /// the host (or of the excitation, if faster), and at every sample.
 double observation_interval_s(const Scenario& scenario);
+
+/// The times the run loop observes the engine: every sample interval Δ split into
+/// `steps_per_sample` steps of `step_s` (≤ observation_interval_s), step j of sample
+/// interval k at k Δ + j step_s, computed so that samples fall exactly on multiples of Δ.
+struct ObservationGrid {
+  long steps_per_sample;
+  double step_s;
+};
+ObservationGrid observation_grid(const Scenario& scenario);
 
 /// The cycle analysis of a run starting from `bed`: it needs the host's equilibrium with
 /// the bed resting in it.

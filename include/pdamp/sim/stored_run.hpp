@@ -16,6 +16,7 @@
 #include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
+#include "pdamp/sim/snapshots.hpp"
 #include "pdamp/store/run_store.hpp"
 
 namespace pdamp {
@@ -25,11 +26,13 @@ struct RunPlan {
   Model model;
   const Scenario* scenario;
   std::optional<RestitutionTable> calibration;  ///< the hard model's, when calibrated
+  std::optional<SnapshotSettings> snapshots;    ///< checked against the scenario
 };
 
-/// Checks that `model` can run `scenario` (check_model_can_run) and calibrates the hard
-/// model's restitution if the scenario asks for it. Throws InputError for either failing.
-RunPlan plan_run(Model model, const Scenario& scenario);
+/// Checks that `model` can run `scenario` (check_model_can_run) with these snapshots
+/// (check_snapshot_settings), and calibrates the hard model's restitution if the scenario
+/// asks for it. Throws InputError for any of them failing.
+RunPlan plan_run(Model model, const Scenario& scenario, const std::optional<SnapshotSettings>& snapshots = {});
 
 /// Gives the bed a run starts from, settling it or taking it from the store (the bed is
 /// shared by the runs of a comparison). May throw, Interrupted included.
@@ -40,8 +43,9 @@ struct StoredRun {
   RunOutcome outcome;
 };
 
-/// Stores the run's row, gets its bed, runs it and stores how it ended: failed with the
-/// message if the bed, the engine or the run failed, interrupted if a signal stopped it.
+/// Stores the run's row, gets its bed, runs it (writing its snapshots, recorded in the
+/// store) and stores how it ended: failed with the message if the bed, the engine, the
+/// snapshots or the run failed, interrupted if a signal stopped it.
 /// `warn` receives the engine's warnings (they are also appended to the run's message).
 /// Throws only if the store itself fails.
 StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& bed, const RunControl& control,

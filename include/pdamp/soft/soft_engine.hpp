@@ -43,6 +43,7 @@ class SoftEngine final : public Engine {
   void advance_to(double t_s) override;
   Observation observe() const override;
   State state() const override;
+  SphereDissipation dissipation_by_sphere() const override;
   double time_step_s() const override { return dt_s_; }
   EngineStatistics statistics() const override;
   std::vector<std::string> warnings() const override;
@@ -97,14 +98,20 @@ class SoftEngine final : public Engine {
   bool runs_in_parallel() const;
   int sphere_count() const { return balls_.size(); }
 
-  /// Force and torque on each sphere of a chunk, as it builds up in the force pass.
+  /// Force and torque on each sphere of a chunk, and its share of the step's losses, as
+  /// they build up in the force pass.
   struct ChunkWrenches {
     double fx[chunk_size], fy[chunk_size], fz[chunk_size], tx[chunk_size], ty[chunk_size], tz[chunk_size];
+    double impact_J[chunk_size], friction_J[chunk_size];
   };
-  /// The force and torque a pair contact puts on its partner, added after the force pass.
+  /// What a pair contact gives its partner, added after the force pass: its force and
+  /// torque if it touches, and the partner's half of the step's losses (also of a contact
+  /// that has just come apart).
   struct Reaction {
     Vec3<double> force_N, torque_N_m;
+    double impact_J, friction_J;
     int partner;
+    bool touching;
   };
   // The force pass's parts; inlined, the chunk's totals also stay in registers (the pass's
   // stores, histories and reactions, might otherwise alias them and force a store and
@@ -122,12 +129,12 @@ class SoftEngine final : public Engine {
   [[gnu::always_inline]] inline std::array<int, 3> list_wall_contacts_to_evaluate(int first, int end,
                                                                                   WallLists& out) const;
   /// Evaluates the pairs `pairs[0, count)` of chunk c (count ≤ lanes; `pairs` holds a
-  /// register's worth), adding to the chunk's wrenches and writing the reactions of those
-  /// touching at `reactions[touching_pairs++]`.
+  /// register's worth), adding to the chunk's wrenches and writing their reactions at
+  /// `reactions[reaction_count++]`.
   template <class Real>
   [[gnu::always_inline]] inline void add_pair_contacts(const int* pairs, int count, double dt_s, int c,
                                                        ChunkTotals& totals, ChunkWrenches& on_chunk,
-                                                       Reaction* reactions, int& touching_pairs);
+                                                       Reaction* reactions, int& reaction_count);
   /// Evaluates the contacts of `spheres[0, count)` of chunk c with one wall, likewise.
   template <class Real, int wall>
   [[gnu::always_inline]] inline void add_wall_contacts(const int* spheres, int count, double dt_s, int c,
@@ -137,13 +144,14 @@ class SoftEngine final : public Engine {
   [[gnu::always_inline]] static inline ContactHistory<Real> gather_histories(const ContactTable& contacts,
                                                                              const int* entry);
   /// Adds lane l of a contact evaluated for the sphere in `slot` of its chunk: its force and
-  /// torque (which acts with the opposite sign), its energy, and its history, opened, kept
-  /// or closed at `open`.
+  /// torque (which acts with the opposite sign), its energy (`loss_share` of the losses to
+  /// the sphere), and its history, opened, kept or closed at `open`.
   template <class Real>
   [[gnu::always_inline]] static inline void book_contact(const ContactForce<Real>& f, const Vec3<Real>& torque,
                                                          const ContactHistory<Real>& h, int l, bool touching,
-                                                         double overlap_ratio, int& open, ContactTable& contacts,
-                                                         ChunkTotals& totals, ChunkWrenches& on_chunk, int slot);
+                                                         double overlap_ratio, double loss_share, int& open,
+                                                         ContactTable& contacts, ChunkTotals& totals,
+                                                         ChunkWrenches& on_chunk, int slot);
   void add_reactions();
 
   // Renumbering the spheres at each neighbour-list build (refresh_neighbours).
@@ -167,6 +175,8 @@ class SoftEngine final : public Engine {
   SphereMotions v_, w_;
   SphereVectors force_, torque_, x_at_rebuild_;
   SphereScalars mass_;
+  /// Each sphere's losses since t = 0 (dissipation_by_sphere).
+  SphereScalars impact_J_, friction_J_;
   std::vector<int> original_index_;
   std::vector<bool> visited_;  ///< scratch for renumbering
   NeighbourList neighbours_;

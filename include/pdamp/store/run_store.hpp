@@ -81,6 +81,13 @@ struct CycleOverview {
   std::int64_t psi_peak_cycle = 0;
 };
 
+/// Where a run's snapshots are (pdamp run --snapshots).
+struct SnapshotRecord {
+  std::string folder, collection;  ///< absolute paths
+  double interval_s = 0.0;
+  std::int64_t frames = 0;
+};
+
 /// A run `pdamp delete` removed: its summary and how many comparisons went with it.
 struct DeletedRun {
   RunSummary run;
@@ -165,15 +172,20 @@ class RunStore {
 
   std::int64_t save_comparison(const ComparisonRecord& comparison);
 
+  /// Records (or updates) where a run's snapshots are.
+  void save_snapshots(std::int64_t run_id, const SnapshotRecord& snapshots);
+  /// Empty for a run without snapshots.
+  std::optional<SnapshotRecord> snapshots(std::int64_t run_id);
+
   std::vector<RunSummary> list_runs();
   std::optional<RunSummary> summary(std::int64_t run_id);
   /// Empty for a run without cycles.
   std::optional<CycleOverview> cycle_overview(std::int64_t run_id);
 
   /// Deletes runs and every row that refers to them (samples, cycles, statistics,
-  /// calibrations, comparisons), all or none: throws InputError, deleting nothing, for an
+  /// calibrations, comparisons, where their snapshots are), all or none: throws InputError, deleting nothing, for an
   /// id not in the store, or for a `running` run unless `including_running`. Returns the
-  /// deleted runs. Settled beds stay (other runs may start from them).
+  /// deleted runs. Settled beds stay (other runs may start from them), and so do snapshot files.
   std::vector<DeletedRun> delete_runs(std::span<const std::int64_t> run_ids, bool including_running);
 
   sqlite::Database& database() { return *db_; }

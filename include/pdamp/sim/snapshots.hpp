@@ -1,0 +1,88 @@
+#pragma once
+/// Snapshots of a run for ParaView (docs/snapshots.md): every `interval_s` of simulated
+/// time, the spheres and the cavity as VTK PolyData, listed with their times in one
+/// collection per run:
+///   DIR/run-<id>/spheres_<frame>.vtp, cavity_<frame>.vtp, run-<id>.pvd
+/// with frame = 0, 1, ... at t = frame × interval_s.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include "pdamp/model/cavity.hpp"
+#include "pdamp/model/engine.hpp"
+#include "pdamp/scenario/scenario.hpp"
+#include "pdamp/sim/run.hpp"
+#include "pdamp/vtk/vtk_xml.hpp"
+
+namespace pdamp {
+
+/// What `--snapshots EVERY_S [--snapshot-dir DIR]` asks for (pdamp run, pdamp compare).
+struct SnapshotSettings {
+  double interval_s = 0.0;          ///< simulated time between frames (s)
+  std::filesystem::path directory;  ///< where each run's folder run-<id> goes
+};
+
+/// The most frames one run may write: with ~120 bytes a sphere a frame, Table 1's 1,246
+/// spheres take 15 GB at this many.
+inline constexpr std::int64_t max_snapshot_frames = 100'000;
+
+/// The settings from the options' texts (`directory` empty: `default_directory`); throws
+/// InputError if EVERY_S is not a number. check_snapshot_settings checks its value.
+SnapshotSettings parse_snapshot_settings(const std::string& every_s, const std::string& directory,
+                                         const std::filesystem::path& default_directory);
+
+/// The default folder of a store's snapshots: beside it, named after it
+/// (pdamp.sqlite: pdamp.snapshots).
+std::filesystem::path default_snapshot_directory(const std::filesystem::path& store_file);
+
+/// Checks, before anything is written, that a run of `scenario` can take these snapshots:
+/// the interval is positive, finite and a whole multiple of the run loop's observation
+/// step (so the engines run exactly as without snapshots), the frames are within
+/// max_snapshot_frames, and the directory exists as a writable folder or can be created.
+/// Throws InputError naming the value, why it is wrong and what is valid.
+void check_snapshot_settings(const SnapshotSettings& settings, const Scenario& scenario);
+
+/// Where a run's snapshots are.
+struct SnapshotFiles {
+  std::filesystem::path folder;      ///< DIR/run-<id>, absolute
+  std::filesystem::path collection;  ///< the .pvd in it
+};
+SnapshotFiles snapshot_files(const SnapshotSettings& settings, std::int64_t run_id);
+
+/// Writes one run's frames at the run loop's observations (RunControl::at_observation).
+class SnapshotWriter {
+ public:
+  /// Creates the run's folder and an empty collection. Throws RuntimeFailure if the
+  /// folder cannot be made or already holds files (of a run of another store).
+  SnapshotWriter(const SnapshotSettings& settings, const Scenario& scenario, std::int64_t run_id);
+
+  /// Writes a frame if this observation is at a multiple of the interval. Throws
+  /// RuntimeFailure naming the file that cannot be written.
+  void at_observation(const Engine& engine, const ObservationStep& step);
+
+  const SnapshotFiles& files() const { return files_; }
+  std::int64_t frames() const { return frames_; }
+
+ private:
+  void write_frame(const Engine& engine, std::int64_t frame);
+
+  SnapshotFiles files_;
+  Cavity cavity_;
+  std::int64_t steps_per_frame_;
+  vtk::Collection collection_;
+  std::int64_t frames_ = 0;
+};
+
+/// The spheres of `state` with what each dissipated, as PolyData: points at the centres
+/// (m), arrays radius_m, velocity_m_s, spin_rad_s, dissipated_impact_J,
+/// dissipated_friction_J and id (the sphere's index in the scenario), field TimeValue (s).
+vtk::PolyData spheres_poly_data(const State& state, const SphereDissipation& dissipated);
+
+/// The cavity's surface at the host's position `host_z_m` (m): its side wall as
+/// `segments` quadrilaterals and each cap as one polygon, field data TimeValue (s),
+/// host_z_m and host_v_m_s.
+vtk::PolyData cavity_poly_data(const Cavity& cavity, const Observation& observation, int segments = 64);
+
+}  // namespace pdamp

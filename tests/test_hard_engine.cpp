@@ -514,6 +514,7 @@ TEST_CASE("jam: a cluster driven against the side wall sticks to the host instea
   CHECK(test::statistic(engine, "jam_stuck_to_host") > 0);
   CHECK(test::statistic(engine, "events_sphere_sphere") + test::statistic(engine, "events_wall") < 30000);
   CHECK(engine.observe().energy.balance_relative_error(e0) <= 1e-9);
+  test::check_dissipation_by_sphere(engine);  // the merges' and the sticking's losses shared out
   // The heavy sphere is stopped against the wedged spheres.
   const State end = engine.state();
   const Eigen::Vector3d relative =
@@ -551,6 +552,7 @@ TEST_CASE("jam: Table 4's 250 Hz bed, hit by a cap at 15 m/s, gets past the wedg
   CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
   CHECK(test::statistic(engine, "jam_stuck_to_host") > 0);
   CHECK(outcome.energy_balance_rel_err <= 1e-9);
+  test::check_dissipation_by_sphere(engine);
 }
 
 TEST_CASE("a stop request ends advance_to within 4096 events, and run.max_events ends the run there") {

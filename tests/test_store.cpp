@@ -437,13 +437,14 @@ TEST_CASE("delete_runs removes runs with every row that refers to them, all or n
   const std::vector<std::int64_t> live{running};
   CHECK_THROWS_WITH_AS(store.delete_runs(live, false), doctest::Contains("is running"), InputError);
 
+  store.save_snapshots(2, {"/frames/run-2", "/frames/run-2/run-2.pvd", 0.01, 11});
   const std::vector<std::int64_t> both{2, running, 2};
   const auto deleted = store.delete_runs(both, true);
   REQUIRE(deleted.size() == 2);
   CHECK(deleted[0].run.run_id == 2);
   CHECK(deleted[0].run.n_samples == 10);
   CHECK(deleted[0].comparisons == 1);
-  for (const auto& table : {"runs", "samples", "cycles", "run_statistics", "calibrations"}) {
+  for (const auto& table : {"runs", "samples", "cycles", "run_statistics", "calibrations", "run_snapshots"}) {
     CAPTURE(table);
     CHECK(rows_of(table) == 0);
   }
@@ -455,6 +456,23 @@ TEST_CASE("delete_runs removes runs with every row that refers to them, all or n
   CHECK(scalar(db, "SELECT count(*) FROM initial_particles") == 1);
   // The deleted ids are never used again.
   CHECK(store.begin_run(a_run()) == running + 1);
+}
+
+TEST_CASE("where a run's snapshots are: none, recorded, then updated with the frames written") {
+  test::TempDir dir("store-snapshots");
+  RunStore store(dir / "runs.sqlite");
+  const auto id = store.begin_run(a_run());
+  CHECK_FALSE(store.snapshots(id));
+  store.save_snapshots(id, {"/frames/run-1", "/frames/run-1/run-1.pvd", 0.01, 0});
+  store.save_snapshots(id, {"/frames/run-1", "/frames/run-1/run-1.pvd", 0.01, 151});
+  const auto s = store.snapshots(id);
+  REQUIRE(s);
+  CHECK(s->folder == "/frames/run-1");
+  CHECK(s->collection == "/frames/run-1/run-1.pvd");
+  CHECK(s->interval_s == 0.01);
+  CHECK(s->frames == 151);
+  CHECK(scalar(store.database(), "SELECT count(*) FROM run_snapshots") == 1);
+  CHECK_THROWS_AS(store.save_snapshots(id, {"/f", "/f/r.pvd", 0.0, 1}), std::exception);  // interval_s > 0
 }
 
 TEST_CASE("a store of schema 5 is migrated: every row kept, and run ids beyond any left behind") {

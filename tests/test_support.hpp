@@ -1,6 +1,7 @@
 #pragma once
 /// Helpers shared by the tests.
 
+#include <doctest/doctest.h>
 #include <unistd.h>
 
 #include <Eigen/Core>
@@ -29,6 +30,19 @@ inline std::int64_t statistic(const Engine& engine, const std::string& name) {
     if (key == name) return value;
   }
   throw std::invalid_argument("no engine statistic '" + name + "'");
+}
+
+/// Each sphere's share of the losses (Engine::dissipation_by_sphere) adds up to the
+/// ledger's impact and friction losses, to the rounding of summing them in another order.
+inline void check_dissipation_by_sphere(const Engine& engine) {
+  const SphereDissipation by_sphere = engine.dissipation_by_sphere();
+  const EnergyLedger ledger = engine.observe().energy;
+  const double total_J = ledger.dissipated_impact_J + ledger.dissipated_friction_J;
+  CAPTURE(total_J);
+  REQUIRE(by_sphere.impact_J.size() == engine.state().particles.size());
+  REQUIRE(by_sphere.friction_J.size() == by_sphere.impact_J.size());
+  CHECK(std::abs(by_sphere.impact_J.sum() - ledger.dissipated_impact_J) <= 1e-12 * total_J);
+  CHECK(std::abs(by_sphere.friction_J.sum() - ledger.dissipated_friction_J) <= 1e-12 * total_J);
 }
 
 /// A scenario from inline text (every unspecified key takes its default).

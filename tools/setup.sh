@@ -4,9 +4,10 @@
 # Usage: tools/setup.sh [extra Debian packages, e.g. valgrind for tools/bench-hard.sh --counts]
 set -euo pipefail
 
-# python3-matplotlib: the test of tools/plot_rom.py.
+# python3-matplotlib: the test of tools/plot_rom.py. python3-vtk9: VTK's own reader checks
+# the snapshots the tests write (tools/check_snapshots.py).
 packages=(g++ cmake make libboost-dev libboost-program-options-dev libeigen3-dev libsqlite3-dev doctest-dev sqlite3
-  python3-matplotlib "$@")
+  python3-matplotlib python3-vtk9 "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -33,13 +33,12 @@ void require_multiple_of_observation_step(double interval_s, const Scenario& sce
   const double nearest = std::round(multiple);
   if (nearest >= 1.0 && std::abs(nearest * grid.step_s - interval_s) <= 1e-9 * interval_s) return;
   const double below = std::max(1.0, std::floor(multiple)), above = std::max(1.0, std::ceil(multiple));
-  throw InputError("--snapshots " + describe(interval_s) + ": frames are taken where the run loop observes the engine, " +
-                   "every " + describe(grid.step_s) + " s (run.sample_interval_s = " +
-                   describe(scenario.run.sample_interval_s) + " s in " + std::to_string(grid.steps_per_sample) +
-                   (grid.steps_per_sample == 1 ? " step" : " steps") +
-                   "), so that the engines run as they do without snapshots; give a whole multiple of it, e.g. " +
-                   describe(below * grid.step_s) + (above != below ? " or " + describe(above * grid.step_s) : "") +
-                   " s");
+  throw InputError(
+      "--snapshots " + describe(interval_s) + ": frames are taken where the run loop observes the engine, " + "every " +
+      describe(grid.step_s) + " s (run.sample_interval_s = " + describe(scenario.run.sample_interval_s) + " s in " +
+      std::to_string(grid.steps_per_sample) + (grid.steps_per_sample == 1 ? " step" : " steps") +
+      "), so that the engines run as they do without snapshots; give a whole multiple of it, e.g. " +
+      describe(below * grid.step_s) + (above != below ? " or " + describe(above * grid.step_s) : "") + " s");
 }
 
 void require_frames_within_budget(double interval_s, const Scenario& scenario) {
@@ -47,7 +46,7 @@ void require_frames_within_budget(double interval_s, const Scenario& scenario) {
   if (frames <= static_cast<double>(max_snapshot_frames)) return;
   std::ostringstream why;
   why << "--snapshots " << describe(interval_s) << ": run.duration_s = " << scenario.run.duration_s << " s would take "
-      << frames << " frames, more than the " << max_snapshot_frames
+      << static_cast<long long>(frames) << " frames, more than the " << max_snapshot_frames
       << " a run may write (docs/snapshots.md); give an interval of at least "
       << describe(scenario.run.duration_s / static_cast<double>(max_snapshot_frames - 1)) << " s";
   throw InputError(why.str());
@@ -179,7 +178,8 @@ vtk::PolyData cavity_poly_data(const Cavity& cavity, const Observation& observat
   for (const double z : {bottom, top}) {
     for (int k = 0; k < segments; ++k) {
       const double angle = 2.0 * std::numbers::pi * k / segments;
-      data.points.insert(data.points.end(), {cavity.radius_m() * std::cos(angle), cavity.radius_m() * std::sin(angle), z});
+      data.points.insert(data.points.end(),
+                         {cavity.radius_m() * std::cos(angle), cavity.radius_m() * std::sin(angle), z});
     }
   }
   std::vector<std::int64_t>& corners = data.polys.connectivity;

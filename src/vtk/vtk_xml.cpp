@@ -132,9 +132,9 @@ void write_poly_data(const std::filesystem::path& file, const PolyData& data) {
   head << "      </PointData>\n      <Points>\n        " << appended.element("Float64", "", 3, block_of(data.points))
        << "      </Points>\n";
   for (const auto& [tag, cells] : {std::pair{"Verts", &data.verts}, std::pair{"Polys", &data.polys}}) {
-    head << "      <" << tag << ">\n        " << appended.element("Int64", "connectivity", 1, block_of(cells->connectivity))
-         << "        " << appended.element("Int64", "offsets", 1, block_of(cells->offsets)) << "      </" << tag
-         << ">\n";
+    head << "      <" << tag << ">\n        "
+         << appended.element("Int64", "connectivity", 1, block_of(cells->connectivity)) << "        "
+         << appended.element("Int64", "offsets", 1, block_of(cells->offsets)) << "      </" << tag << ">\n";
   }
   head << "    </Piece>\n  </PolyData>\n";
   OutputFile out(file, "wb");

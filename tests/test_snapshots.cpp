@@ -1,0 +1,295 @@
+/// Snapshots for ParaView: each engine's share of the losses by sphere, the checks of the
+/// settings, and the files read back by VTK's own reader (tools/check_snapshots.py, with
+/// Debian's python3-vtk9), against the engines' states and the stored samples.
+#include <doctest/doctest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <vector>
+
+#include "pdamp/errors.hpp"
+#include "pdamp/model/placement.hpp"
+#include "pdamp/sim/engine_factory.hpp"
+#include "pdamp/sim/run.hpp"
+#include "pdamp/sim/snapshots.hpp"
+#include "pdamp/store/run_store.hpp"
+#include "test_process.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+
+namespace {
+
+constexpr Model both_models[] = {Model::soft, Model::hard};
+
+/// Three 1 mm spheres in a wide cavity without gravity, on a host at rest: two about to
+/// meet off-centre (a sliding impact), the third far from both.
+Scenario free_space() {
+  return test::scenario_from(
+      "[host]\nz0_m = 0\nv0_m_s = 0\n[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.05\nheight_m = 0.05\n"
+      "[particles]\ncount = 3\ndiameter_m = 0.001\n");
+}
+
+struct Discard final : RunRecorder {
+  void record_sample(const Observation&, double) override {}
+  void record_cycle(const CycleRecord&) override {}
+  void flush() override {}
+};
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+Result run(const std::string& executable, const std::vector<std::string>& args, const test::TempDir& dir,
+           const std::string& stem) {
+  test::Process p(executable, args, dir, stem);
+  const int code = p.wait();
+  return {code, p.out(), p.err()};
+}
+
+/// tools/check_snapshots.py on a collection, with VTK's reader: fails, with its report, if
+/// python3-vtk9 is missing.
+Result check_with_vtk(const std::filesystem::path& collection, const std::vector<std::string>& options,
+                      const test::TempDir& dir) {
+  std::vector<std::string> args{(test::source_dir() / "tools" / "check_snapshots.py").string(), collection.string()};
+  args.insert(args.end(), options.begin(), options.end());
+  return run("/usr/bin/python3", args, dir, "check_snapshots");
+}
+
+/// Writes every sphere of `engine` as the checker reads it: a line `frame t`, then per
+/// sphere id, centre, radius, velocity, spin, impact and friction losses, to 17 digits.
+void dump_state(std::ostream& out, const Engine& engine) {
+  const State state = engine.state();
+  const SphereDissipation lost = engine.dissipation_by_sphere();
+  const Particles& p = state.particles;
+  char line[512];
+  std::snprintf(line, sizeof line, "frame %.17g\n", state.observation.t_s);
+  out << line;
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    std::snprintf(line, sizeof line, "%ld %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n",
+                  static_cast<long>(i), p.position_m(0, i), p.position_m(1, i), p.position_m(2, i), p.radius_m[i],
+                  p.velocity_m_s(0, i), p.velocity_m_s(1, i), p.velocity_m_s(2, i), p.angular_velocity_rad_s(0, i),
+                  p.angular_velocity_rad_s(1, i), p.angular_velocity_rad_s(2, i), lost.impact_J[i], lost.friction_J[i]);
+    out << line;
+  }
+}
+
+std::string message_of(const SnapshotSettings& settings, const Scenario& scenario) {
+  try {
+    check_snapshot_settings(settings, scenario);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+}  // namespace
+
+TEST_CASE("two spheres meeting in free space: each takes half of the losses, a sphere apart none") {
+  for (const Model model : both_models) {
+    CAPTURE(to_string(model));
+    const Scenario s = free_space();
+    const Particles p = test::spheres({{-0.002, 0.0, 0.025}, {0.002, 0.0003, 0.025}, {0.0, 0.01, 0.025}},
+                                      {{0.5, 0.0, 0.0}, {-0.5, 0.0, 0.0}, {0.0, 0.0, 0.0}});
+    const auto engine = make_engine(model, s, p);
+    engine->advance_to(0.01);
+    const EnergyLedger ledger = engine->observe().energy;
+    const SphereDissipation lost = engine->dissipation_by_sphere();
+    REQUIRE(ledger.dissipated_impact_J > 0.0);
+    REQUIRE(ledger.dissipated_friction_J > 0.0);
+    CHECK(lost.impact_J[0] == lost.impact_J[1]);
+    CHECK(lost.friction_J[0] == lost.friction_J[1]);
+    CHECK(lost.impact_J[2] == 0.0);
+    CHECK(lost.friction_J[2] == 0.0);
+    test::check_dissipation_by_sphere(*engine);
+  }
+}
+
+TEST_CASE("a sphere bouncing to rest on the floor keeps all of its losses") {
+  for (const Model model : both_models) {
+    CAPTURE(to_string(model));
+    const Scenario s = test::scenario_from(
+        "[host]\nz0_m = 0\nv0_m_s = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n[particles]\ncount = 1\n"
+        "diameter_m = 0.001\n");
+    const auto engine = make_engine(model, s, test::spheres({{0.001, 0.0, 0.005}}, {{0.1, 0.0, 0.0}}));
+    engine->advance_to(0.5);
+    const EnergyLedger ledger = engine->observe().energy;
+    const SphereDissipation lost = engine->dissipation_by_sphere();
+    REQUIRE(ledger.dissipated_impact_J > 0.0);
+    REQUIRE(ledger.dissipated_friction_J > 0.0);
+    CHECK(lost.impact_J[0] == ledger.dissipated_impact_J);
+    CHECK(lost.friction_J[0] == ledger.dissipated_friction_J);
+  }
+}
+
+TEST_CASE("small.ini, both models: every sphere's share of the losses adds up to the ledger's") {
+  const Scenario s = load_scenario(test::scenario_file("small"));
+  const Particles placed = place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m);
+  for (const Model model : both_models) {
+    CAPTURE(to_string(model));
+    const auto engine = make_engine(model, s, placed);
+    engine->advance_to(s.run.duration_s);
+    test::check_dissipation_by_sphere(*engine);
+    const SphereDissipation lost = engine->dissipation_by_sphere();
+    CHECK(lost.impact_J.minCoeff() > 0.0);  // every sphere took part
+    if (model == Model::hard) {
+      // Collisions with the riding bed share their losses with the rider, resting spheres keep theirs.
+      CHECK(test::statistic(*engine, "events_rider") > 0);
+      CHECK(test::statistic(*engine, "bed_rests") > 0);
+    }
+  }
+}
+
+TEST_CASE("the run loop tells each observation's step, off the grid only at a duration between steps") {
+  Scenario s = load_scenario(test::scenario_file("table1"), {"particles.count=0", "run.duration_s=0.0104"});
+  const ObservationGrid grid = observation_grid(s);
+  REQUIRE(grid.steps_per_sample == 3);  // 1/256 of the host's period is less than half a sample interval
+  std::vector<ObservationStep> steps;
+  RunControl control;
+  control.at_observation = [&](const Engine& engine, const ObservationStep& step) {
+    steps.push_back(step);
+    const double t = engine.observe().t_s;
+    if (step.on_grid) {
+      CHECK(t == doctest::Approx(static_cast<double>(step.index) * grid.step_s).epsilon(1e-12));
+    } else {
+      CHECK(t == s.run.duration_s);
+    }
+  };
+  const auto engine = make_engine(Model::hard, s, Particles(0));
+  Discard discard;
+  REQUIRE(run_simulation(*engine, s, discard, control).status == RunStatus::completed);
+  // 0.0104 s = 62.4 steps of 1/6000 s: steps 0 to 62, then the end before step 63.
+  REQUIRE(steps.size() == 64);
+  for (std::size_t k = 0; k < steps.size(); ++k) CHECK(steps[k].index == static_cast<std::int64_t>(k));
+  CHECK(std::count_if(steps.begin(), steps.end(), [](const ObservationStep& o) { return !o.on_grid; }) == 1);
+  CHECK_FALSE(steps.back().on_grid);
+}
+
+TEST_CASE("snapshot settings are refused, naming the value, before anything is written") {
+  test::TempDir dir("snapshot-settings");
+  const Scenario table1 = load_scenario(test::scenario_file("table1"));
+  const std::filesystem::path folder = dir / "frames";
+  // Table 1 observes every 1/6000 s (a sample interval of 0.5 ms in three steps).
+  CHECK(message_of({0.01, folder}, table1) == "accepted");
+  CHECK(message_of({0.0005 / 3.0, folder}, table1) == "accepted");
+  CHECK(message_of({0.0, folder}, table1).find("--snapshots 0: must be a positive, finite number") == 0);
+  CHECK(message_of({-0.01, folder}, table1).find("--snapshots -0.01: must be a positive") == 0);
+  CHECK(message_of({std::nan(""), folder}, table1).find("--snapshots nan: must be a positive") == 0);
+  CHECK(message_of({HUGE_VAL, folder}, table1).find("--snapshots inf: must be a positive") == 0);
+  const std::string between = message_of({0.0001, folder}, table1);
+  CHECK(between.find("--snapshots 0.0001: frames are taken where the run loop observes the engine, every 0.000166667 s") ==
+        0);
+  CHECK(between.find("give a whole multiple of it, e.g. 0.000166667 s") != std::string::npos);
+  const Scenario long_run = load_scenario(test::scenario_file("table1"), {"run.duration_s=30"});
+  const std::string many = message_of({0.0005 / 3.0, folder}, long_run);
+  CHECK(many.find("would take 180001 frames, more than the 100000 a run may write") != std::string::npos);
+  std::ofstream(dir / "a-file") << "not a folder";
+  CHECK(message_of({0.01, dir / "a-file"}, table1).find("--snapshot-dir '" + (dir / "a-file").string() +
+                                                        "' cannot be used: '") == 0);
+  CHECK(message_of({0.01, dir / "a-file" / "frames"}, table1).find("cannot be created: '" +
+                                                                   (dir / "a-file").string() + "' is not a folder") !=
+        std::string::npos);
+  CHECK_THROWS_WITH_AS(parse_snapshot_settings("0.01s", "", folder), doctest::Contains("--snapshots '0.01s'"),
+                       InputError);
+  CHECK_FALSE(std::filesystem::exists(folder));
+}
+
+TEST_CASE("snapshots of both engines, read back by VTK, hold the engines' states at their times") {
+  test::TempDir dir("snapshots-vtk");
+  const Scenario s = load_scenario(test::scenario_file("small"), {"run.duration_s=0.05"});
+  const Particles placed = place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m);
+  const SnapshotSettings settings{0.005, dir / "frames"};
+  check_snapshot_settings(settings, s);
+  for (const Model model : both_models) {
+    CAPTURE(to_string(model));
+    const std::int64_t run_id = model == Model::soft ? 1 : 2;
+    const auto engine = make_engine(model, s, placed);
+    SnapshotWriter writer(settings, s, run_id);
+    std::ofstream dump(dir / ("dump-" + std::to_string(run_id)));
+    RunControl control;
+    control.at_observation = [&](const Engine& e, const ObservationStep& step) {
+      const std::int64_t frames = writer.frames();
+      writer.at_observation(e, step);
+      if (writer.frames() > frames) dump_state(dump, e);
+    };
+    Discard discard;
+    REQUIRE(run_simulation(*engine, s, discard, control).status == RunStatus::completed);
+    dump.close();
+    CHECK(writer.frames() == 11);
+    CHECK(writer.files().collection == dir / "frames" / ("run-" + std::to_string(run_id)) /
+                                           ("run-" + std::to_string(run_id) + ".pvd"));
+    const Result checked =
+        check_with_vtk(writer.files().collection, {"--dump", (dir / ("dump-" + std::to_string(run_id))).string()}, dir);
+    INFO(checked.err);
+    CHECK(checked.code == 0);
+    CHECK(checked.out.find("11 frames") != std::string::npos);
+  }
+}
+
+TEST_CASE("a run's folder that already holds files is not written into") {
+  test::TempDir dir("snapshots-taken");
+  const Scenario s = load_scenario(test::scenario_file("small"));
+  std::filesystem::create_directories(dir / "run-1");
+  std::ofstream(dir / "run-1" / "spheres_000000.vtp") << "another store's run 1";
+  CHECK_THROWS_WITH_AS(SnapshotWriter({0.01, dir.path()}, s, 1), doctest::Contains("already holds files"),
+                       RuntimeFailure);
+  CHECK_NOTHROW(SnapshotWriter({0.01, dir.path()}, s, 2));
+}
+
+TEST_CASE("pdamp compare --snapshots: VTK reads every frame of both runs, and they agree with the stored samples") {
+  test::TempDir dir("snapshots-cli");
+  const auto db = dir / "runs.sqlite";
+  const Result r = run(PDAMP_EXECUTABLE,
+                       {"compare", "--scenario", test::scenario_file("small").string(), "--duration", "0.1",
+                        "--snapshots", "0.01", "--db", db.string()},
+                       dir, "pdamp");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  for (const std::int64_t run_id : {1, 2}) {
+    const std::string run_name = "run-" + std::to_string(run_id);
+    // The default folder is beside the store, named after it.
+    const auto collection = dir / "runs.snapshots" / run_name / (run_name + ".pvd");
+    const Result checked = check_with_vtk(collection, {"--db", db.string(), "--run", std::to_string(run_id)}, dir);
+    INFO(checked.err);
+    CHECK(checked.code == 0);
+    CHECK(checked.out.find("11 frames") != std::string::npos);
+    const Result shown = run(PDAMP_EXECUTABLE, {"show", std::to_string(run_id), "--db", db.string()}, dir, "show");
+    CHECK(shown.out.find("snapshots               11 frames every 0.01 s: " + collection.string()) !=
+          std::string::npos);
+  }
+}
+
+TEST_CASE("bad snapshot options exit with code 2, name the value and write nothing") {
+  test::TempDir dir("snapshots-cli-bad");
+  const auto db = dir / "runs.sqlite";
+  std::ofstream(dir / "a-file") << "not a folder";
+  const std::string small = test::scenario_file("small").string();
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases{
+      {{"--snapshots", "0"}, "--snapshots 0: must be a positive, finite number"},
+      {{"--snapshots", "-1"}, "--snapshots -1: must be a positive, finite number"},
+      {{"--snapshots", "nan"}, "--snapshots nan: must be a positive, finite number"},
+      {{"--snapshots", "inf"}, "--snapshots inf: must be a positive, finite number"},
+      {{"--snapshots", "often"}, "--snapshots 'often': must be a number of seconds"},
+      {{"--snapshots", "0.0002"}, "give a whole multiple of it"},
+      {{"--snapshots", "0.0005", "--duration", "60"}, "would take 120001 frames"},
+      {{"--snapshots", "0.01", "--snapshot-dir", (dir / "a-file" / "frames").string()}, "is not a folder"},
+      {{"--snapshot-dir", (dir / "frames").string()}, "--snapshot-dir needs --snapshots EVERY_S"},
+  };
+  for (const auto& [options, expected] : cases) {
+    for (const char* command : {"run", "compare"}) {
+      std::vector<std::string> args{command, "--scenario", small, "--db", db.string()};
+      if (std::string(command) == "run") args.insert(args.end(), {"--model", "hard"});
+      args.insert(args.end(), options.begin(), options.end());
+      CAPTURE(command);
+      CAPTURE(expected);
+      const Result r = run(PDAMP_EXECUTABLE, args, dir, "pdamp");
+      CHECK(r.code == 2);
+      CHECK(r.err.find(expected) != std::string::npos);
+    }
+  }
+  CHECK_FALSE(std::filesystem::exists(db));
+  CHECK_FALSE(std::filesystem::exists(dir / "runs.snapshots"));
+  CHECK_FALSE(std::filesystem::exists(dir / "frames"));
+}

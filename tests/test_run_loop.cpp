@@ -1,10 +1,13 @@
 /// The run loop (sim/run.hpp): how a run ends when its engine is interrupted inside an
-/// advance, or its state stops being finite.
+/// advance, or its state stops being finite; the observation steps it reports.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <limits>
+#include <vector>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/run.hpp"
 #include "test_support.hpp"
 
@@ -29,6 +32,7 @@ class FaultyEngine final : public Engine {
     return o;
   }
   State state() const override { return {observe(), Particles(0)}; }
+  SphereDissipation dissipation_by_sphere() const override { return {}; }
   double time_step_s() const override { return 0.0; }
 
  private:
@@ -64,4 +68,29 @@ TEST_CASE("a stop inside the engine's advance ends the run as interrupted, with 
   CHECK(outcome.status == RunStatus::interrupted);
   CHECK(outcome.message.find("stopped by a signal at t = 0.050") == 0);
   CHECK(recorder.samples == 51);
+}
+
+TEST_CASE("the run loop tells each observation's step, off the grid only at a duration between steps") {
+  Scenario s = load_scenario(test::scenario_file("table1"), {"particles.count=0", "run.duration_s=0.0104"});
+  const ObservationGrid grid = observation_grid(s);
+  REQUIRE(grid.steps_per_sample == 3);  // 1/256 of the host's period is less than half a sample interval
+  std::vector<ObservationStep> steps;
+  RunControl control;
+  control.at_observation = [&](const Engine& engine, const ObservationStep& step) {
+    steps.push_back(step);
+    const double t = engine.observe().t_s;
+    if (step.on_grid) {
+      CHECK(t == doctest::Approx(static_cast<double>(step.index) * grid.step_s).epsilon(1e-12));
+    } else {
+      CHECK(t == s.run.duration_s);
+    }
+  };
+  const auto engine = make_engine(Model::hard, s, Particles(0));
+  CountSamples samples;
+  REQUIRE(run_simulation(*engine, s, samples, control).status == RunStatus::completed);
+  // 0.0104 s = 62.4 steps of 1/6000 s: steps 0 to 62, then the end before step 63.
+  REQUIRE(steps.size() == 64);
+  for (std::size_t k = 0; k < steps.size(); ++k) CHECK(steps[k].index == static_cast<std::int64_t>(k));
+  CHECK(std::count_if(steps.begin(), steps.end(), [](const ObservationStep& o) { return !o.on_grid; }) == 1);
+  CHECK_FALSE(steps.back().on_grid);
 }

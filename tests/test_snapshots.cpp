@@ -142,31 +142,6 @@ TEST_CASE("small.ini, both models: every sphere's share of the losses adds up to
   }
 }
 
-TEST_CASE("the run loop tells each observation's step, off the grid only at a duration between steps") {
-  Scenario s = load_scenario(test::scenario_file("table1"), {"particles.count=0", "run.duration_s=0.0104"});
-  const ObservationGrid grid = observation_grid(s);
-  REQUIRE(grid.steps_per_sample == 3);  // 1/256 of the host's period is less than half a sample interval
-  std::vector<ObservationStep> steps;
-  RunControl control;
-  control.at_observation = [&](const Engine& engine, const ObservationStep& step) {
-    steps.push_back(step);
-    const double t = engine.observe().t_s;
-    if (step.on_grid) {
-      CHECK(t == doctest::Approx(static_cast<double>(step.index) * grid.step_s).epsilon(1e-12));
-    } else {
-      CHECK(t == s.run.duration_s);
-    }
-  };
-  const auto engine = make_engine(Model::hard, s, Particles(0));
-  Discard discard;
-  REQUIRE(run_simulation(*engine, s, discard, control).status == RunStatus::completed);
-  // 0.0104 s = 62.4 steps of 1/6000 s: steps 0 to 62, then the end before step 63.
-  REQUIRE(steps.size() == 64);
-  for (std::size_t k = 0; k < steps.size(); ++k) CHECK(steps[k].index == static_cast<std::int64_t>(k));
-  CHECK(std::count_if(steps.begin(), steps.end(), [](const ObservationStep& o) { return !o.on_grid; }) == 1);
-  CHECK_FALSE(steps.back().on_grid);
-}
-
 TEST_CASE("snapshot settings are refused, naming the value, before anything is written") {
   test::TempDir dir("snapshot-settings");
   const Scenario table1 = load_scenario(test::scenario_file("table1"));
@@ -179,18 +154,17 @@ TEST_CASE("snapshot settings are refused, naming the value, before anything is w
   CHECK(message_of({std::nan(""), folder}, table1).find("--snapshots nan: must be a positive") == 0);
   CHECK(message_of({HUGE_VAL, folder}, table1).find("--snapshots inf: must be a positive") == 0);
   const std::string between = message_of({0.0001, folder}, table1);
-  CHECK(between.find("--snapshots 0.0001: frames are taken where the run loop observes the engine, every 0.000166667 s") ==
-        0);
+  CHECK(between.find(
+            "--snapshots 0.0001: frames are taken where the run loop observes the engine, every 0.000166667 s") == 0);
   CHECK(between.find("give a whole multiple of it, e.g. 0.000166667 s") != std::string::npos);
   const Scenario long_run = load_scenario(test::scenario_file("table1"), {"run.duration_s=30"});
   const std::string many = message_of({0.0005 / 3.0, folder}, long_run);
   CHECK(many.find("would take 180001 frames, more than the 100000 a run may write") != std::string::npos);
   std::ofstream(dir / "a-file") << "not a folder";
-  CHECK(message_of({0.01, dir / "a-file"}, table1).find("--snapshot-dir '" + (dir / "a-file").string() +
-                                                        "' cannot be used: '") == 0);
-  CHECK(message_of({0.01, dir / "a-file" / "frames"}, table1).find("cannot be created: '" +
-                                                                   (dir / "a-file").string() + "' is not a folder") !=
-        std::string::npos);
+  CHECK(message_of({0.01, dir / "a-file"}, table1)
+            .find("--snapshot-dir '" + (dir / "a-file").string() + "' cannot be used: '") == 0);
+  CHECK(message_of({0.01, dir / "a-file" / "frames"}, table1)
+            .find("cannot be created: '" + (dir / "a-file").string() + "' is not a folder") != std::string::npos);
   CHECK_THROWS_WITH_AS(parse_snapshot_settings("0.01s", "", folder), doctest::Contains("--snapshots '0.01s'"),
                        InputError);
   CHECK_FALSE(std::filesystem::exists(folder));
@@ -218,8 +192,8 @@ TEST_CASE("snapshots of both engines, read back by VTK, hold the engines' states
     REQUIRE(run_simulation(*engine, s, discard, control).status == RunStatus::completed);
     dump.close();
     CHECK(writer.frames() == 11);
-    CHECK(writer.files().collection == dir / "frames" / ("run-" + std::to_string(run_id)) /
-                                           ("run-" + std::to_string(run_id) + ".pvd"));
+    CHECK(writer.files().collection ==
+          dir / "frames" / ("run-" + std::to_string(run_id)) / ("run-" + std::to_string(run_id) + ".pvd"));
     const Result checked =
         check_with_vtk(writer.files().collection, {"--dump", (dir / ("dump-" + std::to_string(run_id))).string()}, dir);
     INFO(checked.err);

@@ -221,6 +221,8 @@ TEST_CASE("pdamp compare --snapshots: VTK reads every frame of both runs, and th
                        dir, "pdamp");
   INFO(r.err);
   REQUIRE(r.code == 0);
+  CHECK(r.err.find("pdamp: 11 snapshots of run 2: " + (dir / "runs.snapshots" / "run-2" / "run-2.pvd").string()) !=
+        std::string::npos);
   for (const std::int64_t run_id : {1, 2}) {
     const std::string run_name = "run-" + std::to_string(run_id);
     // The default folder is beside the store, named after it.

@@ -37,6 +37,8 @@ def read(path):
 
 
 def spheres_actor(spheres, scale_mJ):
+    """The spheres glyphed at their size and coloured by loss from the least to the most
+    (or 0 to `scale_mJ`); the colour table and the losses (mJ)."""
     lost = (vtk_to_numpy(spheres.GetPointData().GetArray("dissipated_impact_J")) +
             vtk_to_numpy(spheres.GetPointData().GetArray("dissipated_friction_J"))) * 1e3
     colour = numpy_to_vtk(lost, deep=True)
@@ -57,11 +59,11 @@ def spheres_actor(spheres, scale_mJ):
     mapper.SetScalarModeToUsePointFieldData()
     mapper.SelectColorArray("dissipated_mJ")
     table = vtk.vtkColorTransferFunction()
-    top = scale_mJ if scale_mJ else float(lost.max())
+    low, top = (0.0, scale_mJ) if scale_mJ else (float(lost.min()), float(lost.max()))
     for k, rgb in enumerate(VIRIDIS):
-        table.AddRGBPoint(top * k / (len(VIRIDIS) - 1), *rgb)
+        table.AddRGBPoint(low + (top - low) * k / (len(VIRIDIS) - 1), *rgb)
     mapper.SetLookupTable(table)
-    mapper.SetScalarRange(0.0, top)
+    mapper.SetScalarRange(low, top)
     actor = vtk.vtkActor()
     actor.SetMapper(mapper)
     return actor, table, lost
@@ -98,8 +100,11 @@ def main():
     parser.add_argument("--time", type=float, required=True, help="simulated time (s): the nearest frame is drawn")
     parser.add_argument("--out", required=True, help="PNG file")
     parser.add_argument("--size", default="900x560", help="width x height in pixels")
-    parser.add_argument("--scale-mJ", type=float, help="the colour scale's top (default: the largest loss)")
+    parser.add_argument("--scale-mJ", type=float,
+                        help="colours from 0 to this (default: from the least to the most a sphere lost)")
     parser.add_argument("--title", default="", help="a line of text over the picture")
+    parser.add_argument("--elevation", type=float, default=25.0, help="the view's angle above the horizontal (deg)")
+    parser.add_argument("--zoom", type=float, default=1.25, help="the view's zoom, 1 to see the whole cavity")
     args = parser.parse_args()
     spheres_file, cavity_file, time = frame_files(args.collection, args.time)
     spheres, cavity = read(spheres_file), read(cavity_file)
@@ -112,18 +117,20 @@ def main():
         renderer.AddActor(actor)
     bar = vtk.vtkScalarBarActor()
     bar.SetLookupTable(table)
-    bar.SetTitle("dissipated per sphere (mJ)")
+    bar.SetTitle("dissipated\nper sphere\n(mJ)")
     bar.SetNumberOfLabels(5)
     bar.SetLabelFormat("%.2g")
     bar.SetOrientationToVertical()
-    bar.SetPosition(0.86, 0.12)
-    bar.SetWidth(0.1)
-    bar.SetHeight(0.76)
+    bar.SetPosition(0.85, 0.1)
+    bar.SetWidth(0.12)
+    bar.SetHeight(0.8)
+    bar.UnconstrainedFontSizeOn()
     for text in (bar.GetTitleTextProperty(), bar.GetLabelTextProperty()):
         text.SetColor(0.1, 0.1, 0.1)
         text.ShadowOff()
         text.ItalicOff()
-        text.SetFontSize(13)
+        text.BoldOff()
+        text.SetFontSize(14)
     renderer.AddActor2D(bar)
     caption = vtk.vtkTextActor()
     host_z = cavity.GetFieldData().GetArray("host_z_m").GetValue(0)
@@ -135,14 +142,16 @@ def main():
     caption.SetPosition(12, 12)
     renderer.AddActor2D(caption)
 
-    # A side view from a little above, the cavity filling the frame.
-    bounds = cavity.GetBounds()
-    centre = [(bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, (bounds[4] + bounds[5]) / 2]
+    # A side view from `elevation` degrees above, the cavity filling the frame.
     camera = renderer.GetActiveCamera()
-    camera.SetFocalPoint(*centre)
-    camera.SetPosition(centre[0], centre[1] - 0.09, centre[2] + 0.035)
+    camera.SetFocalPoint(0, 0, 0)
+    camera.SetPosition(0, -1, 0)
     camera.SetViewUp(0, 0, 1)
     camera.SetViewAngle(20)
+    renderer.ResetCamera(cavity.GetBounds())
+    camera.Elevation(args.elevation)
+    camera.OrthogonalizeViewUp()
+    camera.Zoom(args.zoom)
     renderer.ResetCameraClippingRange()
     light = vtk.vtkLightKit()
     light.AddLightsToRenderer(renderer)

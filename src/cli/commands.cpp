@@ -227,9 +227,9 @@ int compare_command(const ScenarioRequest& request, const std::filesystem::path&
         run_and_store(store, plan, bed.source(), run_control(scenario, progress, label), warnings_to(progress));
     progress.end();
     run_ids[plan.model == Model::hard] = run.run_id;
-    if (const auto snapshots = store.snapshots(run.run_id)) {
-      progress.message("pdamp: " + std::to_string(snapshots->frames) + " snapshots of run " +
-                       std::to_string(run.run_id) + ": " + printable(snapshots->collection));
+    if (const auto written = store.snapshots(run.run_id)) {
+      progress.message("pdamp: " + std::to_string(written->frames) + " snapshots of run " + std::to_string(run.run_id) +
+                       ": " + printable(written->collection));
     }
     if (run.outcome.status != RunStatus::completed) {
       print_summary(store, run.run_id, std::cout);

@@ -475,3 +475,55 @@ TEST_CASE("the host's acceleration crossing -g: the time the bed lifts off a sin
   REQUIRE(lift.contact);
   CHECK(lift.t_s == doctest::Approx(std::asin(9.81 / (amplitude * w * w)) / w).epsilon(1e-6));
 }
+
+TEST_CASE(
+    "contact laws: slow first approaches are elastic, repeats at one instant keep the law, calibration sets e_n") {
+  Scenario s = test::scenario_from("[hard]\nen = 0.6\nmu = 0.3\nbeta0 = 0.2\n[hard_wall]\nen = 0.4\n");
+  const ContactLaws constant(s, nullptr);
+  const double slow = 0.5 * s.hard_resting.elastic_speed_m_s, fast = 2.0 * s.hard_resting.elastic_speed_m_s;
+  CHECK(constant.at(fast, false, false).en == 0.6);
+  CHECK(constant.at(fast, true, false).en == 0.4);
+  CHECK(constant.at(fast, false, false).mu == 0.3);
+  CHECK(constant.at(slow, false, false).en == 1.0);
+  CHECK(constant.at(slow, true, false).en == 1.0);
+  CHECK(constant.at(slow, false, true).en == 0.6);  // wedged: the sequence must die out
+  RestitutionTable table;
+  table.sphere_sphere = {{0.01, 1.0}, {0.9, 0.5}, {0.3, 0.1}};
+  table.sphere_wall = {{0.01, 1.0}, {0.8, 0.4}, {0.2, 0.0}};
+  const ContactLaws calibrated(s, &table);
+  CHECK(calibrated.at(0.1, false, false).en == doctest::Approx(0.7).epsilon(1e-12));  // halfway in log(speed)
+  CHECK(calibrated.at(0.1, true, false).beta0 == doctest::Approx(0.1).epsilon(1e-12));
+  CHECK(calibrated.at(slow, false, false).en == 1.0);
+}
+
+TEST_CASE("sticking to the host: a free host shares the body's vertical momentum, a prescribed one does the work") {
+  const double m = 3e-5, vz = -0.4, host_v = 0.25, carried = 0.02;
+  const VerticalSticking free = stick_vertically(m, vz, host_v, false, carried);
+  CHECK(carried * free.host_v_m_s + m * free.host_v_m_s == doctest::Approx(carried * host_v + m * vz).epsilon(1e-15));
+  const double before = 0.5 * m * vz * vz + 0.5 * carried * host_v * host_v;
+  const double after = 0.5 * (m + carried) * free.host_v_m_s * free.host_v_m_s;
+  CHECK(free.loss_J == doctest::Approx(before - after).epsilon(1e-12));
+  CHECK(free.host_work_J == 0.0);
+  const VerticalSticking prescribed = stick_vertically(m, vz, host_v, true, 0.0);
+  CHECK(prescribed.host_v_m_s == host_v);
+  // The body's energy change is the host's work less the loss.
+  CHECK(0.5 * m * host_v * host_v - 0.5 * m * vz * vz ==
+        doctest::Approx(prescribed.host_work_J - prescribed.loss_J).epsilon(1e-14));
+}
+
+TEST_CASE("side wall: a sphere barely leaving the curved wall is turned away at the floor speed, its energy kept") {
+  const Eigen::Vector2d outward(0.6, 0.8);
+  const double floor_speed = 1e-4;
+  // Sliding along the wall, leaving at a tenth of the floor speed.
+  const Eigen::Vector2d along(-0.8, 0.6);
+  const Eigen::Vector2d v = 0.02 * along - 1e-5 * outward;
+  const Eigen::Vector2d turned = turned_along_side_wall(v, outward, floor_speed);
+  CHECK(turned.squaredNorm() == doctest::Approx(v.squaredNorm()).epsilon(1e-14));
+  CHECK(-turned.dot(outward) == doctest::Approx(floor_speed).epsilon(1e-12));
+  CHECK(turned.dot(along) > 0.0);
+  // Leaving fast enough, or too slow to reach the floor speed at all: unchanged.
+  const Eigen::Vector2d leaving = 0.02 * along - 0.001 * outward;
+  CHECK(turned_along_side_wall(leaving, outward, floor_speed) == leaving);
+  const Eigen::Vector2d crawling = 5e-5 * along;
+  CHECK(turned_along_side_wall(crawling, outward, floor_speed) == crawling);
+}

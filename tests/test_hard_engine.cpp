@@ -23,13 +23,6 @@ using hard::HardEngine;
 
 namespace {
 
-/// A scenario whose walls do not move: a prescribed host of zero amplitude.
-Scenario fixed_walls(const std::string& text) {
-  Scenario s = test::scenario_from(text + "\n[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 1\n");
-  s.excitation.amplitude_m = 0.0;
-  return s;
-}
-
 /// Spheres placed by the shared placement, with random velocities of one speed and random spins.
 /// The shared placement, with the cavity where the host starts.
 Particles placed(const Scenario& s) { return place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m); }
@@ -215,7 +208,7 @@ TEST_CASE("vertical momentum of spheres and host is conserved by every kind of c
 }
 
 TEST_CASE("angular momentum about the origin is conserved by a frictional sphere-sphere collision") {
-  Scenario s = fixed_walls(
+  Scenario s = test::fixed_walls(
       "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n"
       "[particles]\ncount = 2\ndiameter_m = 0.001\n[hard]\nen = 0.6\nmu = 0.3\nbeta0 = 0.4\n");
   Particles p(2);
@@ -383,7 +376,7 @@ TEST_CASE("the same scenario and seed give bit-identical results") {
 }
 
 TEST_CASE("overlapping initial spheres (a soft-settled bed) are pushed just apart, and a large push is reported") {
-  const Scenario s = fixed_walls("[particles]\ncount = 2\ndiameter_m = 0.001\n");
+  const Scenario s = test::fixed_walls("[particles]\ncount = 2\ndiameter_m = 0.001\n");
   Particles p(2);
   for (int i = 0; i < 2; ++i) p.radius_m[i] = 0.0005, p.mass_kg[i] = 1e-6;
   p.position_m.col(0) = Eigen::Vector3d(0, 0, 0.002);
@@ -451,7 +444,7 @@ TEST_CASE(
   // like a cap into a dense bed: the pairwise collisions through the touching cluster
   // converge ever more slowly (300 000 of them before the jam rule); jammed spheres merge
   // into a rigid body instead. No gravity, walls out of reach.
-  const Scenario s = fixed_walls(
+  const Scenario s = test::fixed_walls(
       "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.05\nheight_m = 0.05\n"
       "[particles]\ncount = 55\ndiameter_m = 0.0012\n[hard]\nen = 0.154\nmu = 0.55\nbeta0 = 0.35\n");
   const std::vector<Eigen::Vector3d> sites = fcc_sites_nearest_origin(55, jam_radius_m);

@@ -36,12 +36,10 @@ constexpr double radius_m = 0.0005;
 /// Lead spheres of 1 mm with the Table 1 soft law in a wide cavity whose walls stand
 /// still (a prescribed host of zero amplitude); the hard model takes the calibrated e_n(v), β0(v).
 Scenario fixed_walls(const std::string& text) {
-  Scenario s = test::scenario_from(
-      "[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n[particles]\ndiameter_m = 0.001\n"
-      "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 1\n[hard]\nrestitution = calibrated\n" +
+  return test::fixed_walls(
+      "[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n[particles]\ndiameter_m = 0.001\n[hard]\nrestitution = "
+      "calibrated\n" +
       text);
-  s.excitation.amplitude_m = 0.0;
-  return s;
 }
 
 /// The calibration of the fixed-wall lead spheres, computed once.

@@ -50,6 +50,13 @@ inline Scenario scenario_from(const std::string& text, const ScenarioOverrides& 
   return parse_scenario(text, "test", "test scenario", overrides);
 }
 
+/// A scenario from inline text whose walls do not move: a prescribed host of zero amplitude.
+inline Scenario fixed_walls(const std::string& text) {
+  Scenario s = scenario_from(text + "\n[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 1\n");
+  s.excitation.amplitude_m = 0.0;
+  return s;
+}
+
 /// Spheres at the given positions and velocities, at rest otherwise; 1 mm lead by default.
 inline Particles spheres(const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector3d>& velocities,
                          double radius_m = 0.0005, double density_kg_m3 = 9000) {

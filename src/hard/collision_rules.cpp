@@ -78,4 +78,40 @@ CollisionOutcome walton_collision(const Eigen::Vector3d& u, const Eigen::Vector3
   return out;
 }
 
+ContactLaws::ContactLaws(const Scenario& scenario, const RestitutionTable* calibration)
+    : sphere_(scenario.hard_particle),
+      wall_(scenario.hard_wall),
+      calibration_(calibration ? std::optional<RestitutionTable>(*calibration) : std::nullopt),
+      elastic_speed_m_s_(scenario.hard_resting.elastic_speed_m_s) {}
+
+HardContactLaw ContactLaws::at(double approach_speed_m_s, bool wall, bool repeat) const {
+  HardContactLaw law = wall ? wall_ : sphere_;
+  if (calibration_) {
+    const RestitutionCurve& curve = wall ? calibration_->sphere_wall : calibration_->sphere_sphere;
+    law.en = curve.en_at(approach_speed_m_s);
+    law.beta0 = curve.beta0_at(approach_speed_m_s);
+  }
+  if (approach_speed_m_s < elastic_speed_m_s_ && !repeat) law.en = 1.0;
+  return law;
+}
+
+VerticalSticking stick_vertically(double mass_kg, double vz_m_s, double host_v_m_s, bool prescribed,
+                                  double carried_mass_kg) {
+  const double relative_vz = vz_m_s - host_v_m_s;
+  if (prescribed) {
+    return {0.5 * mass_kg * relative_vz * relative_vz, host_v_m_s, mass_kg * (host_v_m_s - vz_m_s) * host_v_m_s};
+  }
+  return {0.5 * mass_kg * carried_mass_kg / (mass_kg + carried_mass_kg) * relative_vz * relative_vz,
+          (carried_mass_kg * host_v_m_s + mass_kg * vz_m_s) / (carried_mass_kg + mass_kg)};
+}
+
+Eigen::Vector2d turned_along_side_wall(const Eigen::Vector2d& v, const Eigen::Vector2d& outward,
+                                       double floor_speed_m_s) {
+  const double leaving = -v.dot(outward);
+  const double speed_sq = v.squaredNorm();
+  if (leaving >= floor_speed_m_s || speed_sq <= floor_speed_m_s * floor_speed_m_s) return v;
+  const Eigen::Vector2d along = (v + leaving * outward).normalized();
+  return -floor_speed_m_s * outward + std::sqrt(speed_sq - floor_speed_m_s * floor_speed_m_s) * along;
+}
+
 }  // namespace pdamp::hard

@@ -13,7 +13,9 @@
 /// impulse; a contact with a sphere riding on the host mixes both.
 
 #include <Eigen/Core>
+#include <optional>
 
+#include "pdamp/model/restitution.hpp"
 #include "pdamp/scenario/scenario.hpp"
 
 namespace pdamp::hard {
@@ -55,5 +57,45 @@ CollisionOutcome walton_collision(const Eigen::Vector3d& relative_velocity, cons
 
 /// K·p for the mobility above.
 Eigen::Vector3d apply_mobility(const Mobility& mobility, const Eigen::Vector3d& normal, const Eigen::Vector3d& p);
+
+/// The laws of the engine's collisions: the scenario's constants, or with a `calibration`
+/// the soft law's e_n(v) and β0(v) at each impact speed; e_n = 1 for a slow approach.
+class ContactLaws {
+ public:
+  ContactLaws(const Scenario& scenario, const RestitutionTable* calibration);
+  /// The law of a collision with a sphere or a wall at this approach speed. Approaches
+  /// slower than the elastic speed are elastic (which stops inelastic collapse in
+  /// flight), unless a sphere involved has collided at this instant already (`repeat`:
+  /// wedged between two bodies, the sequence must die out, not bounce for ever).
+  HardContactLaw at(double approach_speed_m_s, bool wall, bool repeat) const;
+  double elastic_speed_m_s() const { return elastic_speed_m_s_; }
+
+ private:
+  HardContactLaw sphere_, wall_;
+  std::optional<RestitutionTable> calibration_;
+  double elastic_speed_m_s_;
+};
+
+/// A perfectly inelastic collision of a body with the host in the vertical, the only
+/// direction the host moves in: what it loses, where the host goes, and the work a
+/// prescribed host does on it.
+struct VerticalSticking {
+  double loss_J;           ///< kinetic energy of the vertical relative motion that stops
+  double host_v_m_s;       ///< the host's (and the body's) vertical velocity after
+  double host_work_J = 0;  ///< a prescribed host's work on the body (its velocity is kept)
+};
+/// A body of `mass_kg` moving at `vz_m_s` sticks to a host moving at `host_v_m_s`: a free
+/// host moving `carried_mass_kg` in all (its own and its riders') shares its momentum; a
+/// prescribed one (`prescribed`) keeps its velocity.
+VerticalSticking stick_vertically(double mass_kg, double vz_m_s, double host_v_m_s, bool prescribed,
+                                  double carried_mass_kg);
+
+/// A sphere bouncing off the curved side wall (`outward`, the wall's normal, horizontal)
+/// with horizontal velocity `v`: it leaves at least at `floor_speed_m_s`, its horizontal
+/// speed unchanged. Bouncing ever more often as its radial speed dies out (chords are
+/// ∝ radial speed), it would never stop: the wall turns it as a lasting contact would,
+/// without changing its energy.
+Eigen::Vector2d turned_along_side_wall(const Eigen::Vector2d& v, const Eigen::Vector2d& outward,
+                                       double floor_speed_m_s);
 
 }  // namespace pdamp::hard

@@ -15,7 +15,7 @@
 /// An event is thus always of its owner's current trajectory; it still carries the
 /// partner's counter (or stamp) it was predicted with, and one whose partner changed after
 /// its owner was last re-keyed still reaches the top and is dropped there
-/// (`HardEngine::is_current`). The lists keep events in 16 bytes (`Stored`): four to a
+/// (`FreeFlight::is_current`). The lists keep events in 16 bytes (`Stored`): four to a
 /// cache line, where every re-key reads its owner's whole list.
 ///
 /// The owners' earliest events are ordered by a calendar (Paul, J. Comput. Phys. 221,
@@ -47,7 +47,7 @@ enum class EventKind : std::uint8_t {
   bottom_cap,     ///< ... the bottom cap (moving with the host)
   top_cap,        ///< ... the top cap
   rider,          ///< a free sphere reaches a sphere riding with the host
-  cell_crossing,  ///< a free sphere crosses a face of its cell; j = face (see HardEngine::Face)
+  cell_crossing,  ///< a free sphere crosses a face of its cell; j = face (see FreeFlight::Face)
   host_check,     ///< a free sphere may come within reach of the host's walls or bed (speed envelope)
   host_margin,    ///< a near sphere comes within the margin of a cap or rider, or its host horizon ends
   bed_release,    ///< the host's acceleration stops pressing the riding spheres against their cap

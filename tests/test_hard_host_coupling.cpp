@@ -1,0 +1,261 @@
+/// The hard engine's host coupling (HostCoupling) on its own, with the free flight it
+/// predicts for and the books it writes to: the tiers' margin events as lower bounds on
+/// contact, the riders' attachment and release, when a sphere rests and when the bed is
+/// released.
+#include <doctest/doctest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "pdamp/hard/free_flight.hpp"
+#include "pdamp/hard/hard_ledger.hpp"
+#include "pdamp/hard/host_coupling.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using namespace pdamp::hard;
+
+namespace {
+
+/// The parts the host coupling works with, as the engine holds them.
+struct Parts {
+  FreeFlight flight;
+  HardLedger ledger;
+  HostCoupling host;
+  Parts(const Scenario& s, const Particles& p) : flight(s, p), host(s, p, flight, ledger) { flight.start(p); }
+};
+
+/// Every event in the queue, earliest first (the queue is emptied).
+std::vector<Event> drain(EventQueue& queue) {
+  std::vector<Event> events;
+  const auto all = [](const Event&) { return true; };
+  for (const Event* e = queue.top(all); e; e = queue.top(all)) {
+    events.push_back(*e);
+    queue.pop();
+  }
+  return events;
+}
+
+constexpr double r_m = 0.0005;
+
+/// A free host (10 g on a 400 N/m spring, moving up at 0.2 m/s through its equilibrium)
+/// with gravity, and `count` spheres of 1 mm.
+Scenario free_host(int count) {
+  return test::scenario_from(
+      "[host]\nmass_kg = 0.01\nstiffness_N_m = 400\ndamping_N_s_m = 0.05\nz0_m = 0\nv0_m_s = 0.2\n"
+      "[cavity]\ndiameter_m = 0.02\nheight_m = 0.01\n[particles]\ncount = " +
+      std::to_string(count) + "\ndiameter_m = 0.001\n");
+}
+
+/// The gap of a free sphere on `flight` to the floor or the top cap of a host on `host` at t.
+double cap_gap(const Ballistic& flight, const HostTrajectory& host, double height_m, double t_s) {
+  const double z = flight.position_at(t_s, Eigen::Vector3d(0, 0, -9.81)).z() - host.at(t_s).z_m;
+  return std::min(z - r_m, height_m - z - r_m);
+}
+
+}  // namespace
+
+TEST_CASE("host tiers: a sphere is in every tier whose margin it is within, and touching within the innermost") {
+  const Scenario s = free_host(5);
+  // Gaps to the floor (at rest relative to it) of 0.5 r, 0.05 r, 0.001 r, 1e-5 r, and one
+  // at 0.5 r but 1e-5 r below the top cap.
+  const std::vector<double> gaps{0.5 * r_m, 0.05 * r_m, 0.001 * r_m, 1e-5 * r_m};
+  std::vector<Eigen::Vector3d> positions, velocities;
+  for (std::size_t k = 0; k < gaps.size(); ++k) {
+    positions.emplace_back(-0.006 + 0.003 * static_cast<double>(k), 0, r_m + gaps[k]);
+    velocities.emplace_back(0, 0, 0.2);
+  }
+  positions.emplace_back(0.006, 0, 0.01 - r_m - 1e-5 * r_m);
+  velocities.emplace_back(0, 0, 0.2);
+  Parts parts(s, test::spheres(positions, velocities, r_m));
+  for (int i = 0; i < 5; ++i) parts.host.enter_near(i, 0.0);
+  CHECK(parts.host.tier_of(0) == 0);
+  CHECK(parts.host.tier_of(1) == 1);
+  CHECK(parts.host.tier_of(2) == 2);
+  CHECK(parts.host.tier_of(3) == 3);
+  CHECK(parts.host.tier_of(4) == 3);
+  // Each near sphere has one host-dependent event: a margin event of its innermost tier,
+  // or (touching) its contact or a margin event at the touching horizon.
+  for (const Event& e : drain(parts.flight.queue())) {
+    CAPTURE(e.i);
+    if (e.kind == EventKind::host_margin) {
+      CHECK(e.j == std::min(parts.host.tier_of(e.i), 2));
+    } else {
+      CHECK((e.kind == EventKind::bottom_cap || e.kind == EventKind::top_cap));
+      CHECK(parts.host.tier_of(e.i) == 3);
+    }
+  }
+  // Far again: in no tier.
+  parts.host.leave_sets(3);
+  CHECK(parts.host.tier_of(3) == -1);
+}
+
+TEST_CASE("host tiers: a margin event is a lower bound on contact for any host that strays less than the margin") {
+  // Spheres above the floor of a free host, rising and falling; each tier's margin event
+  // must come before the sphere could touch a cap on any host trajectory within the
+  // tier's margin of the one predicted with: here the host given another velocity at
+  // t = 0, ±|Δv| with |Δv| τ the margin (the trajectories then differ by at most |Δv| s).
+  const Scenario s = free_host(40);
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Eigen::Vector3d> positions, velocities;
+  for (int k = 0; k < 40; ++k) {
+    const double gap = r_m * std::pow(10.0, -5.0 * unit(rng));  // 1e-5 r to r
+    positions.emplace_back(-0.0078 + 0.0004 * k, 0, r_m + gap);
+    velocities.emplace_back(0, 0, 0.2 + 0.05 * (unit(rng) - 0.5));
+  }
+  Parts parts(s, test::spheres(positions, velocities, r_m));
+  for (int i = 0; i < 40; ++i) parts.host.enter_near(i, 0.0);
+  const HostModel model(s);
+  int margin_events = 0;
+  for (const Event& e : drain(parts.flight.queue())) {
+    if (e.kind != EventKind::host_margin) continue;
+    ++margin_events;
+    const auto level = static_cast<std::size_t>(e.j);
+    const double allowed_dv = parts.host.margin_m(level) / parts.host.horizon_s(level);
+    const Ballistic flight = parts.flight.flight(e.i);
+    for (const double dv : {-allowed_dv, allowed_dv}) {
+      const HostTrajectory strayed(model, 0.0, {0.0, 0.2 + dv});
+      for (int k = 0; k <= 2000; ++k) {
+        const double t = e.t_s * k / 2000.0;
+        REQUIRE(cap_gap(flight, strayed, 0.01, t) > -parts.flight.contact_tolerance_m());
+      }
+    }
+  }
+  CHECK(margin_events > 10);
+}
+
+TEST_CASE("riders: a sphere comes to rest on the floor of a free host, which takes its momentum, and leaves with it") {
+  const Scenario s = free_host(1);
+  const double z0 = 0.0;  // the host starts at its equilibrium
+  Parts parts(s, test::spheres({Eigen::Vector3d(0.001, 0.002, z0 + r_m)}, {Eigen::Vector3d(0.01, -0.02, 0.19)}, r_m));
+  PackedParticles& p = parts.flight.particles();
+  p.angular_velocity_rad_s.col(0) = Eigen::Vector3d(3, 1, -2);
+  const double m = p.mass_kg[0], host_mass = s.host.mass_kg;
+  const double vz = 0.19, host_v = 0.2;
+  REQUIRE(parts.host.rests(vz - host_v, 1.0, 0.0));
+  const HostCoupling::Attached attached = parts.host.attach(0, 1, 0.0);
+  CHECK(parts.host.riding_count() == 1);
+  CHECK(parts.flight.sphere(0).riding == 1);
+  CHECK(attached.host_after.v_m_s == doctest::Approx((host_mass * host_v + m * vz) / (host_mass + m)).epsilon(1e-15));
+  CHECK(attached.lab_position_m.isApprox(Eigen::Vector3d(0.001, 0.002, z0 + r_m)));
+  // The sphere now holds its host-frame position, and no motion of its own.
+  CHECK(p.position_m.col(0).isApprox(Eigen::Vector3d(0.001, 0.002, r_m)));
+  CHECK(p.velocity_m_s.col(0).isZero());
+  CHECK(p.angular_velocity_rad_s.col(0).isZero());
+  // The loss: the normal part is impact, the stopped sliding and spin friction.
+  const double reduced = m * host_mass / (m + host_mass);
+  CHECK(parts.ledger.impact_J == doctest::Approx(0.5 * reduced * (vz - host_v) * (vz - host_v)).epsilon(1e-14));
+  CHECK(parts.ledger.friction_J ==
+        doctest::Approx(0.5 * m * (0.01 * 0.01 + 0.02 * 0.02) + 0.5 * 0.4 * m * r_m * r_m * 14.0).epsilon(1e-14));
+  // The host carries it from now on.
+  REQUIRE(parts.host.restart(attached.host_after, 0.0));
+  CHECK(parts.host.carried_mass_kg() == host_mass + m);
+  CHECK(parts.host.inverse_mass_1_kg() == 1.0 / (host_mass + m));
+  const double t = 0.003;
+  const HostState host = parts.host.trajectory().at(t);
+  parts.host.detach(0, host, t);
+  CHECK(parts.host.riding_count() == 0);
+  CHECK(parts.flight.sphere(0).riding == 0);
+  CHECK(p.position_m.col(0).isApprox(Eigen::Vector3d(0.001, 0.002, host.z_m + r_m)));
+  CHECK(p.velocity_m_s.col(0) == Eigen::Vector3d(0, 0, host.v_m_s));
+  CHECK(p.t_ref_s[0] == t);
+  CHECK(parts.host.carried_mass_kg() == host_mass);
+}
+
+TEST_CASE("riders: a sphere rests only slower than the rest speed, pressed by the host's acceleration, on the bed's side") {
+  // A floor moving as z = A sin(ωt) with A ω² = 2 g: at t = 0 its acceleration is 0, and a
+  // quarter period later −2 g, when it falls away from anything on it.
+  constexpr double f_hz = 30.0, w = 2 * std::numbers::pi * f_hz;
+  Scenario s = test::scenario_from(
+      "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 30\n"
+      "[cavity]\ndiameter_m = 0.02\nheight_m = 0.01\n[particles]\ncount = 2\ndiameter_m = 0.001\n");
+  s.excitation.amplitude_m = 2 * 9.81 / (w * w);
+  Parts parts(s, test::spheres({Eigen::Vector3d(0.003, 0, r_m), Eigen::Vector3d(-0.003, 0, 0.005)},
+                               {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, r_m));
+  const double rest = s.hard_resting.rest_speed_m_s;
+  CHECK(parts.host.rests(0.5 * rest, 1.0, 0.0));
+  CHECK_FALSE(parts.host.rests(2.0 * rest, 1.0, 0.0));
+  CHECK_FALSE(parts.host.rests(0.5 * rest, 1.0, 0.25 / f_hz));  // the floor falls away at 2 g
+  CHECK_FALSE(parts.host.rests(0.5 * rest, -1.0, 0.0));        // gravity pulls it off the top cap
+  CHECK(parts.host.rests(0.5 * rest, -1.0, 0.25 / f_hz));      // the top cap comes down at 2 g
+  // With a bed on the floor, the top cap holds none.
+  const HostCoupling::Attached attached = parts.host.attach(0, 1, 0.0);
+  CHECK(attached.host_after.v_m_s == parts.host.trajectory().at(0.0).v_m_s);  // a prescribed host keeps its motion
+  CHECK_FALSE(parts.host.rests(0.5 * rest, -1.0, 0.25 / f_hz));
+}
+
+TEST_CASE("riders: the bed's release is predicted when the floor's acceleration falls to -g") {
+  constexpr double f_hz = 30.0, w = 2 * std::numbers::pi * f_hz;
+  Scenario s = test::scenario_from(
+      "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 30\n"
+      "[cavity]\ndiameter_m = 0.02\nheight_m = 0.01\n[particles]\ncount = 1\ndiameter_m = 0.001\n");
+  s.excitation.amplitude_m = 2 * 9.81 / (w * w);
+  Parts parts(s, test::spheres({Eigen::Vector3d(0.003, 0, r_m)}, {Eigen::Vector3d(0, 0, s.excitation.amplitude_m * w)},
+                               r_m));
+  REQUIRE(parts.host.restart(parts.host.attach(0, 1, 0.0).host_after, 0.0));
+  std::vector<Event> releases;
+  for (const Event& e : drain(parts.flight.queue())) {
+    if (e.kind == EventKind::bed_release) releases.push_back(e);
+  }
+  REQUIRE(releases.size() == 1);
+  CHECK(releases[0].j == 1);
+  CHECK(releases[0].count_j == parts.host.epoch());
+  // −A ω² sin(ωt) = −g: ωt = π/6.
+  CHECK(releases[0].t_s == doctest::Approx(std::numbers::pi / 6 / w).epsilon(1e-9));
+}
+
+TEST_CASE("books: the host's damping and excitation booked in stretches add up to one booking of the whole") {
+  const Scenario s = test::scenario_from(
+      "[host]\nmass_kg = 0.02\nstiffness_N_m = 900\ndamping_N_s_m = 0.3\nz0_m = 0.002\nv0_m_s = 0\n"
+      "[excitation]\nmode = base\namplitude_m = 0.001\nfrequency_hz = 40\n[particles]\ncount = 0\n");
+  const HostModel model(s);
+  const HostTrajectory trajectory(model, 0.0, model.initial_state());
+  const Riders none{0.0, -9.81, false};
+  HardLedger whole, stretches;
+  whole.book_host(trajectory, 0.1, none);
+  for (int k = 1; k <= 10; ++k) stretches.book_host(trajectory, 0.01 * k, none);
+  CHECK(whole.viscous_J > 0.0);
+  CHECK(stretches.viscous_J == doctest::Approx(whole.viscous_J).epsilon(1e-12));
+  CHECK(stretches.excitation_J == doctest::Approx(whole.excitation_J).epsilon(1e-12));
+  // An observation adds what the trajectory did since the last booking.
+  HardLedger booked;
+  booked.book_host(trajectory, 0.04, none);
+  EnergyLedger observed;
+  booked.write_to(observed, trajectory, 0.1, none);
+  CHECK(observed.dissipated_viscous_J == doctest::Approx(whole.viscous_J).epsilon(1e-12));
+  CHECK(observed.excitation_work_J == doctest::Approx(whole.excitation_J).epsilon(1e-12));
+}
+
+TEST_CASE("books: a prescribed host's work on its riders is the change of their energy that moves with it") {
+  Scenario s = test::scenario_from(
+      "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 25\n[particles]\ncount = 0\n");
+  const HostModel model(s);
+  const HostTrajectory trajectory(model, 0.0, model.initial_state());
+  const Riders riders{0.003, -9.81, true};
+  HardLedger ledger;
+  ledger.book_host(trajectory, 0.007, riders);
+  const HostState a = trajectory.at(0.0), b = trajectory.at(0.007);
+  const double expected = 0.003 * (0.5 * b.v_m_s * b.v_m_s + 9.81 * b.z_m) - 0.003 * (0.5 * a.v_m_s * a.v_m_s + 9.81 * a.z_m);
+  CHECK(ledger.excitation_J == doctest::Approx(expected).epsilon(1e-14));
+  CHECK(ledger.viscous_J == 0.0);
+}
+
+TEST_CASE("books: every count has a name of its own, and collisions are the four kinds of contact") {
+  HardStatistics counts;
+  counts.sphere_sphere = 1;
+  counts.side_wall = 20;
+  counts.cap = 300;
+  counts.rider = 4000;
+  counts.cell_crossing = 50000;
+  CHECK(counts.collisions() == 4321);
+  const EngineStatistics named = counts.named();
+  std::vector<std::string> names;
+  for (const auto& [name, value] : named) names.push_back(name);
+  std::sort(names.begin(), names.end());
+  CHECK(std::adjacent_find(names.begin(), names.end()) == names.end());
+  CHECK(names.size() == 25);
+}

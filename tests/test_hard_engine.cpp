@@ -39,15 +39,6 @@ Particles moving_spheres(const Scenario& s, double speed_m_s, double spin_rad_s,
   return p;
 }
 
-double kinetic_energy(const Particles& p) {
-  double e = 0;
-  for (Eigen::Index i = 0; i < p.size(); ++i) {
-    e += 0.5 * p.mass_kg[i] * p.velocity_m_s.col(i).squaredNorm() +
-         0.5 * p.moment_of_inertia(i) * p.angular_velocity_rad_s.col(i).squaredNorm();
-  }
-  return e;
-}
-
 constexpr double jam_radius_m = 0.0006;
 
 /// The `count` sites of a face-centred cubic packing of touching spheres of radius r
@@ -101,7 +92,7 @@ TEST_CASE(
   // speed to start.
   const Scenario s = benchmark_gas(1000);
   HardEngine engine(s, moving_spheres(s, 1.0, 0.0, 5));
-  const double e0 = kinetic_energy(engine.state().particles);
+  const double e0 = test::kinetic_energy(engine.state().particles);
   // A chunk holds about 10 collisions per sphere (mean free time ~0.1 ms at 1 m/s), so
   // the velocities sampled at successive chunks are nearly independent.
   constexpr double chunk_s = 1e-3;
@@ -111,7 +102,7 @@ TEST_CASE(
   while (engine.collisions() < 10'000'000) {
     engine.advance_to(t += chunk_s);
     const Particles p = engine.state().particles;
-    worst_energy_error = std::max(worst_energy_error, std::abs(kinetic_energy(p) - e0) / e0);
+    worst_energy_error = std::max(worst_energy_error, std::abs(test::kinetic_energy(p) - e0) / e0);
     worst_overlap_m = std::max(worst_overlap_m, engine.max_overlap_m());
     if (engine.collisions() < 100'000) continue;  // relaxing from one speed
     for (Eigen::Index i = 0; i < p.size(); ++i) {
@@ -222,21 +213,13 @@ TEST_CASE("angular momentum about the origin is conserved by a frictional sphere
   p.velocity_m_s.col(1) = Eigen::Vector3d(-0.4, 0.0, -0.03);
   p.angular_velocity_rad_s.col(0) = Eigen::Vector3d(100, -50, 300);
   p.angular_velocity_rad_s.col(1) = Eigen::Vector3d(-200, 80, 10);
-  auto angular_momentum = [](const Particles& q) {
-    Eigen::Vector3d l = Eigen::Vector3d::Zero();
-    for (Eigen::Index i = 0; i < q.size(); ++i) {
-      l += q.mass_kg[i] * q.position_m.col(i).cross(q.velocity_m_s.col(i)) +
-           q.moment_of_inertia(i) * q.angular_velocity_rad_s.col(i);
-    }
-    return l;
-  };
   HardEngine engine(s, p);
-  const Eigen::Vector3d l0 = angular_momentum(engine.state().particles);
+  const Eigen::Vector3d l0 = test::angular_momentum(engine.state().particles);
   engine.advance_to(0.006);  // one collision, no wall reached
   REQUIRE(test::statistic(engine, "events_sphere_sphere") == 1);
   REQUIRE(test::statistic(engine, "events_wall") + test::statistic(engine, "events_cap") == 0);
   const Particles after = engine.state().particles;
-  CHECK((angular_momentum(after) - l0).norm() <= 1e-15 * l0.norm());
+  CHECK((test::angular_momentum(after) - l0).norm() <= 1e-15 * l0.norm());
   CHECK(engine.observe().energy.dissipated_friction_J > 0.0);
 }
 

@@ -20,23 +20,13 @@ constexpr double r_m = 0.0005;
 
 /// Spheres in a wide cavity without gravity (fixed walls).
 Scenario weightless(int count) {
-  return test::fixed_walls("[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n[particles]\ncount = " +
-                           std::to_string(count) + "\ndiameter_m = 0.001\n");
+  return test::fixed_walls(
+      "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n[particles]\ncount = " +
+      std::to_string(count) + "\ndiameter_m = 0.001\n");
 }
 
 /// A host far away: its caps and bed out of reach whatever the sphere does.
 constexpr HostReach unreachable{-1e3, 0.0, 0.0};
-
-/// Every event in the queue, earliest first (the queue is emptied).
-std::vector<Event> drain(EventQueue& queue) {
-  std::vector<Event> events;
-  const auto all = [](const Event&) { return true; };
-  for (const Event* e = queue.top(all); e; e = queue.top(all)) {
-    events.push_back(*e);
-    queue.pop();
-  }
-  return events;
-}
 
 std::vector<Event> of_kind(const std::vector<Event>& events, EventKind kind) {
   std::vector<Event> found;
@@ -53,7 +43,7 @@ TEST_CASE("free flight: two spheres closing in get their exact contact time, out
                                      {Eigen::Vector3d(0.2, 0, 0), Eigen::Vector3d(-0.3, 0, 0)}, r_m));
   flight.start(flight.particles().unpacked());
   CHECK_FALSE(flight.predict(0, flight.around(0), 0.0, unreachable));
-  const std::vector<Event> events = drain(flight.queue());
+  const std::vector<Event> events = test::drain(flight.queue());
   const std::vector<Event> contacts = of_kind(events, EventKind::sphere_sphere);
   REQUIRE(contacts.size() == 1);
   CHECK(contacts[0].i == 0);
@@ -73,7 +63,8 @@ TEST_CASE("free flight: two spheres closing in get their exact contact time, out
 
 TEST_CASE("free flight: a crossing moves the sphere into the next cell and brings in the layer of cells beyond it") {
   const Scenario s = weightless(1);
-  FreeFlight flight(s, test::spheres({Eigen::Vector3d(0.0002, -0.0003, 0.0101)}, {Eigen::Vector3d(0.1, 0.1, 0.1)}, r_m));
+  FreeFlight flight(s,
+                    test::spheres({Eigen::Vector3d(0.0002, -0.0003, 0.0101)}, {Eigen::Vector3d(0.1, 0.1, 0.1)}, r_m));
   flight.start(flight.particles().unpacked());
   const CellGrid& grid = flight.grid();
   for (const FreeFlight::Face face : {FreeFlight::x_upper, FreeFlight::y_lower, FreeFlight::z_upper}) {
@@ -107,16 +98,16 @@ TEST_CASE("free flight: the host check comes when the bed could first be reached
   FreeFlight flight(s, test::spheres({Eigen::Vector3d(0.0002, 0, r_m + 0.001)}, {Eigen::Vector3d::Zero()}, r_m));
   flight.start(flight.particles().unpacked());
   CHECK_FALSE(flight.predict(0, flight.around(0), 0.0, {0.0, 0.1, 0.0}));
-  std::vector<Event> checks = of_kind(drain(flight.queue()), EventKind::host_check);
+  std::vector<Event> checks = of_kind(test::drain(flight.queue()), EventKind::host_check);
   REQUIRE(checks.size() == 1);
   CHECK(checks[0].t_s == doctest::Approx(0.01).epsilon(1e-14));
   // A bed 0.4 mm deep is reached sooner; one up to the sphere is within reach now.
   CHECK_FALSE(flight.predict(0, flight.around(0), 0.0, {0.0, 0.1, 0.0004}));
-  checks = of_kind(drain(flight.queue()), EventKind::host_check);
+  checks = of_kind(test::drain(flight.queue()), EventKind::host_check);
   REQUIRE(checks.size() == 1);
   CHECK(checks[0].t_s == doctest::Approx(0.006).epsilon(1e-12));
   CHECK(flight.predict(0, flight.around(0), 0.0, {0.0, 0.1, 0.001}));
-  CHECK(of_kind(drain(flight.queue()), EventKind::host_check).empty());
+  CHECK(of_kind(test::drain(flight.queue()), EventKind::host_check).empty());
 }
 
 TEST_CASE("free flight: the side wall is predicted where the sphere's cell reaches it") {
@@ -129,7 +120,7 @@ TEST_CASE("free flight: the side wall is predicted where the sphere's cell reach
   double t = 0.0;
   CHECK_FALSE(flight.predict(0, flight.around(0), t, unreachable));
   for (int step = 0; step < 100; ++step) {
-    const std::vector<Event> events = drain(flight.queue());
+    const std::vector<Event> events = test::drain(flight.queue());
     const std::vector<Event> walls = of_kind(events, EventKind::side_wall);
     if (!walls.empty()) {
       CHECK(walls[0].t_s == doctest::Approx(0.0095).epsilon(1e-12));

@@ -28,17 +28,6 @@ struct Parts {
   Parts(const Scenario& s, const Particles& p) : flight(s, p), host(s, p, flight, ledger) { flight.start(p); }
 };
 
-/// Every event in the queue, earliest first (the queue is emptied).
-std::vector<Event> drain(EventQueue& queue) {
-  std::vector<Event> events;
-  const auto all = [](const Event&) { return true; };
-  for (const Event* e = queue.top(all); e; e = queue.top(all)) {
-    events.push_back(*e);
-    queue.pop();
-  }
-  return events;
-}
-
 constexpr double r_m = 0.0005;
 
 /// A free host (10 g on a 400 N/m spring, moving up at 0.2 m/s through its equilibrium)
@@ -79,7 +68,7 @@ TEST_CASE("host tiers: a sphere is in every tier whose margin it is within, and 
   CHECK(parts.host.tier_of(4) == 3);
   // Each near sphere has one host-dependent event: a margin event of its innermost tier,
   // or (touching) its contact or a margin event at the touching horizon.
-  for (const Event& e : drain(parts.flight.queue())) {
+  for (const Event& e : test::drain(parts.flight.queue())) {
     CAPTURE(e.i);
     if (e.kind == EventKind::host_margin) {
       CHECK(e.j == std::min(parts.host.tier_of(e.i), 2));
@@ -111,7 +100,7 @@ TEST_CASE("host tiers: a margin event is a lower bound on contact for any host t
   for (int i = 0; i < 40; ++i) parts.host.enter_near(i, 0.0);
   const HostModel model(s);
   int margin_events = 0;
-  for (const Event& e : drain(parts.flight.queue())) {
+  for (const Event& e : test::drain(parts.flight.queue())) {
     if (e.kind != EventKind::host_margin) continue;
     ++margin_events;
     const auto level = static_cast<std::size_t>(e.j);
@@ -166,7 +155,8 @@ TEST_CASE("riders: a sphere comes to rest on the floor of a free host, which tak
   CHECK(parts.host.carried_mass_kg() == host_mass);
 }
 
-TEST_CASE("riders: a sphere rests only slower than the rest speed, pressed by the host's acceleration, on the bed's side") {
+TEST_CASE(
+    "riders: a sphere rests only slower than the rest speed, pressed by the host's acceleration, on the bed's side") {
   // A floor moving as z = A sin(ωt) with A ω² = 2 g: at t = 0 its acceleration is 0, and a
   // quarter period later −2 g, when it falls away from anything on it.
   constexpr double f_hz = 30.0, w = 2 * std::numbers::pi * f_hz;
@@ -180,8 +170,8 @@ TEST_CASE("riders: a sphere rests only slower than the rest speed, pressed by th
   CHECK(parts.host.rests(0.5 * rest, 1.0, 0.0));
   CHECK_FALSE(parts.host.rests(2.0 * rest, 1.0, 0.0));
   CHECK_FALSE(parts.host.rests(0.5 * rest, 1.0, 0.25 / f_hz));  // the floor falls away at 2 g
-  CHECK_FALSE(parts.host.rests(0.5 * rest, -1.0, 0.0));        // gravity pulls it off the top cap
-  CHECK(parts.host.rests(0.5 * rest, -1.0, 0.25 / f_hz));      // the top cap comes down at 2 g
+  CHECK_FALSE(parts.host.rests(0.5 * rest, -1.0, 0.0));         // gravity pulls it off the top cap
+  CHECK(parts.host.rests(0.5 * rest, -1.0, 0.25 / f_hz));       // the top cap comes down at 2 g
   // With a bed on the floor, the top cap holds none.
   const HostCoupling::Attached attached = parts.host.attach(0, 1, 0.0);
   CHECK(attached.host_after.v_m_s == parts.host.trajectory().at(0.0).v_m_s);  // a prescribed host keeps its motion
@@ -194,11 +184,11 @@ TEST_CASE("riders: the bed's release is predicted when the floor's acceleration 
       "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 30\n"
       "[cavity]\ndiameter_m = 0.02\nheight_m = 0.01\n[particles]\ncount = 1\ndiameter_m = 0.001\n");
   s.excitation.amplitude_m = 2 * 9.81 / (w * w);
-  Parts parts(s, test::spheres({Eigen::Vector3d(0.003, 0, r_m)}, {Eigen::Vector3d(0, 0, s.excitation.amplitude_m * w)},
-                               r_m));
+  Parts parts(
+      s, test::spheres({Eigen::Vector3d(0.003, 0, r_m)}, {Eigen::Vector3d(0, 0, s.excitation.amplitude_m * w)}, r_m));
   REQUIRE(parts.host.restart(parts.host.attach(0, 1, 0.0).host_after, 0.0));
   std::vector<Event> releases;
-  for (const Event& e : drain(parts.flight.queue())) {
+  for (const Event& e : test::drain(parts.flight.queue())) {
     if (e.kind == EventKind::bed_release) releases.push_back(e);
   }
   REQUIRE(releases.size() == 1);
@@ -239,7 +229,8 @@ TEST_CASE("books: a prescribed host's work on its riders is the change of their 
   HardLedger ledger;
   ledger.book_host(trajectory, 0.007, riders);
   const HostState a = trajectory.at(0.0), b = trajectory.at(0.007);
-  const double expected = 0.003 * (0.5 * b.v_m_s * b.v_m_s + 9.81 * b.z_m) - 0.003 * (0.5 * a.v_m_s * a.v_m_s + 9.81 * a.z_m);
+  const double expected =
+      0.003 * (0.5 * b.v_m_s * b.v_m_s + 9.81 * b.z_m) - 0.003 * (0.5 * a.v_m_s * a.v_m_s + 9.81 * a.z_m);
   CHECK(ledger.excitation_J == doctest::Approx(expected).epsilon(1e-14));
   CHECK(ledger.viscous_J == 0.0);
 }

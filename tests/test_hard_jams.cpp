@@ -35,39 +35,16 @@ Particles spheres(const std::vector<Eigen::Vector3d>& positions, const std::vect
   return p;
 }
 
-Eigen::Vector3d momentum(const PackedParticles& p) {
-  Eigen::Vector3d total = Eigen::Vector3d::Zero();
-  for (Eigen::Index i = 0; i < p.size(); ++i) total += p.mass_kg[i] * p.velocity_m_s.col(i);
-  return total;
-}
-
-/// About the origin, spins included.
-Eigen::Vector3d angular_momentum(const PackedParticles& p) {
-  Eigen::Vector3d total = Eigen::Vector3d::Zero();
-  for (Eigen::Index i = 0; i < p.size(); ++i) {
-    total += p.mass_kg[i] * Eigen::Vector3d(p.position_m.col(i)).cross(Eigen::Vector3d(p.velocity_m_s.col(i))) +
-             p.moment_of_inertia(i) * p.angular_velocity_rad_s.col(i);
-  }
-  return total;
-}
-
-double kinetic_energy(const PackedParticles& p) {
-  double total = 0.0;
-  for (Eigen::Index i = 0; i < p.size(); ++i) {
-    total += 0.5 * p.mass_kg[i] * p.velocity_m_s.col(i).squaredNorm() +
-             0.5 * p.moment_of_inertia(i) * p.angular_velocity_rad_s.col(i).squaredNorm();
-  }
-  return total;
-}
-
 /// Three touching spheres in a triangle (a wedge), moving and spinning at random.
 Particles wedge(std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> normal;
-  auto random = [&](double scale) -> Eigen::Vector3d { return scale * Eigen::Vector3d(normal(rng), normal(rng), normal(rng)); };
+  auto random = [&](double scale) -> Eigen::Vector3d {
+    return scale * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  };
   const Eigen::Vector3d apex(r_m, std::sqrt(3.0) * r_m, 0.0);
-  return spheres({Eigen::Vector3d::Zero(), Eigen::Vector3d(sigma_m, 0, 0), apex}, {random(0.3), random(0.3), random(0.3)},
-                 {random(500), random(500), random(500)});
+  return spheres({Eigen::Vector3d::Zero(), Eigen::Vector3d(sigma_m, 0, 0), apex},
+                 {random(0.3), random(0.3), random(0.3)}, {random(500), random(500), random(500)});
 }
 
 /// The wedge's three collisions at one instant, the apex also against a cap.
@@ -94,7 +71,8 @@ TEST_CASE("jam records: a sphere is jammed once it collides more than 64 times a
   CHECK_FALSE(jams.note_collision(0, 1, t + 1e-9));
   // Collisions with the host count too.
   t += 2e-9;
-  for (int k = 1; k <= JamResolver::repeats; ++k) REQUIRE_FALSE(jams.note_collision(2, -1, t, JamResolver::held_by_side_wall));
+  for (int k = 1; k <= JamResolver::repeats; ++k)
+    REQUIRE_FALSE(jams.note_collision(2, -1, t, JamResolver::held_by_side_wall));
   CHECK(jams.note_collision(2, -1, t, JamResolver::held_by_side_wall));
 }
 
@@ -122,12 +100,12 @@ TEST_CASE("jam merge: a three-sphere wedge becomes one rigid body with its momen
     CAPTURE(seed);
     JamResolver jams(3);
     PackedParticles p(wedge(seed));
-    const Eigen::Vector3d p0 = momentum(p), l0 = angular_momentum(p);
-    const double e0 = kinetic_energy(p);
+    const Eigen::Vector3d p0 = test::momentum(p), l0 = test::angular_momentum(p);
+    const double e0 = test::kinetic_energy(p);
     HardLedger ledger;
     jams.merge_rigidly(merged_wedge_cluster(jams), p, ledger);
-    CHECK((momentum(p) - p0).norm() <= 1e-15 * p0.norm());
-    CHECK((angular_momentum(p) - l0).norm() <= 1e-14 * l0.norm());
+    CHECK((test::momentum(p) - p0).norm() <= 1e-15 * p0.norm());
+    CHECK((test::angular_momentum(p) - l0).norm() <= 1e-14 * l0.norm());
     // Rigid: one spin, and no pair approaches or recedes (nothing left to collide).
     for (int i = 0; i < 3; ++i) {
       CHECK((p.angular_velocity_rad_s.col(i) - p.angular_velocity_rad_s.col(0)).norm() == 0.0);
@@ -137,7 +115,7 @@ TEST_CASE("jam merge: a three-sphere wedge becomes one rigid body with its momen
       CHECK(std::abs(dx.dot(dv)) <= 1e-14 * dx.norm() * (p.velocity_m_s.col(i).norm() + 1.0));
     }
     // The energy of the relative motion is the loss, split between impact and friction.
-    const double loss = e0 - kinetic_energy(p);
+    const double loss = e0 - test::kinetic_energy(p);
     CHECK(loss > 0.0);
     CHECK(ledger.impact_J + ledger.friction_J == doctest::Approx(loss).epsilon(1e-12));
     CHECK(ledger.impact_J >= 0.0);
@@ -151,17 +129,18 @@ TEST_CASE("jam merge: spheres closing along their line of centres without spin l
                             {Eigen::Vector3d(1.0, 0, 0), Eigen::Vector3d(0.2, 0, 0), Eigen::Vector3d(-0.4, 0, 0)}));
   jams.note_collision(0, 1, 0.5);
   jams.note_collision(1, 2, 0.5);
-  const double e0 = kinetic_energy(p);
+  const double e0 = test::kinetic_energy(p);
   HardLedger ledger;
   jams.merge_rigidly(jams.cluster_of(1, [](int) { return false; }), p, ledger);
   for (int i = 0; i < 3; ++i) CHECK(p.velocity_m_s.col(i).isApprox(Eigen::Vector3d(0.8 / 3, 0, 0), 1e-15));
   CHECK(ledger.friction_J == 0.0);
-  CHECK(ledger.impact_J == doctest::Approx(e0 - kinetic_energy(p)).epsilon(1e-14));
+  CHECK(ledger.impact_J == doctest::Approx(e0 - test::kinetic_energy(p)).epsilon(1e-14));
 }
 
 TEST_CASE("jam sticking: a merged wedge held by a cap sticks to a free host, momentum and energy booked") {
   constexpr double host_mass_kg = 0.01, host_v_m_s = -0.05;
-  for (const std::uint8_t hold : {std::uint8_t{JamResolver::held_by_cap_or_bed}, std::uint8_t{JamResolver::held_by_side_wall}}) {
+  for (const std::uint8_t hold :
+       {std::uint8_t{JamResolver::held_by_cap_or_bed}, std::uint8_t{JamResolver::held_by_side_wall}}) {
     CAPTURE(static_cast<int>(hold));
     JamResolver jams(3);
     PackedParticles p(wedge(7));
@@ -170,19 +149,19 @@ TEST_CASE("jam sticking: a merged wedge held by a cap sticks to a free host, mom
     jams.merge_rigidly(cluster, p, ledger);
     cluster.hold = hold;
     const HardLedger merged = ledger;
-    const double vertical0 = host_mass_kg * host_v_m_s + momentum(p).z();
-    const double body_vz = momentum(p).z() / (3 * mass_kg);
-    const double horizontal_J = 0.5 * momentum(p).head<2>().squaredNorm() / (3 * mass_kg);
+    const double vertical0 = host_mass_kg * host_v_m_s + test::momentum(p).z();
+    const double body_vz = test::momentum(p).z() / (3 * mass_kg);
+    const double horizontal_J = 0.5 * test::momentum(p).head<2>().squaredNorm() / (3 * mass_kg);
     const double vertical_J = 0.5 * (3 * mass_kg) * host_mass_kg / (3 * mass_kg + host_mass_kg) *
                               (body_vz - host_v_m_s) * (body_vz - host_v_m_s);
-    const double e0 = kinetic_energy(p) + 0.5 * host_mass_kg * host_v_m_s * host_v_m_s;
+    const double e0 = test::kinetic_energy(p) + 0.5 * host_mass_kg * host_v_m_s * host_v_m_s;
     const double after = jams.stick_to_host(cluster, {0.0, host_v_m_s}, false, host_mass_kg, p, ledger);
-    CHECK(host_mass_kg * after + momentum(p).z() == doctest::Approx(vertical0).epsilon(1e-15));
+    CHECK(host_mass_kg * after + test::momentum(p).z() == doctest::Approx(vertical0).epsilon(1e-15));
     for (int i = 0; i < 3; ++i) {
       CHECK(p.velocity_m_s.col(i) == Eigen::Vector3d(0, 0, after));
       CHECK(p.angular_velocity_rad_s.col(i).isZero());
     }
-    const double loss = e0 - kinetic_energy(p) - 0.5 * host_mass_kg * after * after;
+    const double loss = e0 - test::kinetic_energy(p) - 0.5 * host_mass_kg * after * after;
     const double impact = ledger.impact_J - merged.impact_J, friction = ledger.friction_J - merged.friction_J;
     CHECK(impact + friction == doctest::Approx(loss).epsilon(1e-12));
     CHECK(ledger.excitation_J == 0.0);
@@ -198,12 +177,12 @@ TEST_CASE("jam sticking: a prescribed host keeps its velocity and does the work 
   const JamResolver::Cluster cluster = merged_wedge_cluster(jams);
   HardLedger ledger;
   jams.merge_rigidly(cluster, p, ledger);
-  const double e0 = kinetic_energy(p);
+  const double e0 = test::kinetic_energy(p);
   const HardLedger merged = ledger;
   const double after = jams.stick_to_host(cluster, {0.0, 0.3}, true, 0.0, p, ledger);
   CHECK(after == 0.3);
   const double loss = ledger.impact_J - merged.impact_J + ledger.friction_J - merged.friction_J;
-  CHECK(kinetic_energy(p) - e0 == doctest::Approx(ledger.excitation_J - loss).epsilon(1e-12));
+  CHECK(test::kinetic_energy(p) - e0 == doctest::Approx(ledger.excitation_J - loss).epsilon(1e-12));
 }
 
 namespace {
@@ -215,10 +194,10 @@ struct DrivenLine {
   Scenario scenario;
   Particles initial{0};
   DrivenLine(int count, double en) {
-    scenario = test::fixed_walls("[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.03125\nheight_m = 0.03125\n"
-                                 "[particles]\ncount = " +
-                                 std::to_string(count + 1) + "\ndiameter_m = 0.001\n[hard]\nen = " + std::to_string(en) +
-                                 "\nmu = 0\n");
+    scenario = test::fixed_walls(
+        "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.03125\nheight_m = 0.03125\n"
+        "[particles]\ncount = " +
+        std::to_string(count + 1) + "\ndiameter_m = 0.001\n[hard]\nen = " + std::to_string(en) + "\nmu = 0\n");
     std::vector<Eigen::Vector3d> positions, velocities;
     for (int k = 0; k <= count; ++k) {
       positions.emplace_back(sigma_m * (k - count / 2), 0, 0.015625);
@@ -229,12 +208,6 @@ struct DrivenLine {
   }
 };
 
-Eigen::Vector3d momentum(const Particles& p) {
-  Eigen::Vector3d total = Eigen::Vector3d::Zero();
-  for (Eigen::Index i = 0; i < p.size(); ++i) total += p.mass_kg[i] * p.velocity_m_s.col(i);
-  return total;
-}
-
 }  // namespace
 
 TEST_CASE("jam in the engine: a sphere driven into two touching ones with e_n = 0 collapses, and they merge") {
@@ -243,14 +216,14 @@ TEST_CASE("jam in the engine: a sphere driven into two touching ones with e_n = 
   // middle sphere's 65th collision at the instant merges the three.
   const DrivenLine line(2, 0.0);
   hard::HardEngine engine(line.scenario, line.initial);
-  const Eigen::Vector3d p0 = momentum(engine.state().particles);
+  const Eigen::Vector3d p0 = test::momentum(engine.state().particles);
   const double e0 = engine.observe().energy.stored_J();
   engine.advance_to(1e-3);
   CHECK(test::statistic(engine, "jam_merges") == 1);
   CHECK(test::statistic(engine, "jam_merged_spheres") == 3);
   CHECK(test::statistic(engine, "events_sphere_sphere") <= 2 * JamResolver::repeats);
   const Particles after = engine.state().particles;
-  CHECK((momentum(after) - p0).norm() <= 1e-15 * p0.norm());
+  CHECK((test::momentum(after) - p0).norm() <= 1e-15 * p0.norm());
   for (int i = 1; i < 3; ++i) CHECK((after.velocity_m_s.col(i) - after.velocity_m_s.col(0)).norm() <= 1e-15);
   CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
   const EnergyLedger ledger = engine.observe().energy;
@@ -290,14 +263,15 @@ TEST_CASE("jam in the engine: a line driven against the side wall of a free host
       "[particles]\ncount = 3\ndiameter_m = 0.001\n[hard]\nen = 0\nmu = 0.5\nbeta0 = 0.3\n"
       "[hard_wall]\nen = 0\nmu = 0.5\nbeta0 = 0.3\n");
   constexpr double wall_m = 0.015625;
-  Particles p = spheres({Eigen::Vector3d(wall_m - r_m - 2 * sigma_m, 0, 0.015625),
-                         Eigen::Vector3d(wall_m - r_m - sigma_m, 0, 0.015625), Eigen::Vector3d(wall_m - r_m, 0, 0.015625)},
-                        {Eigen::Vector3d(1.0, 0, 0.1), Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, 0.1)});
+  Particles p =
+      spheres({Eigen::Vector3d(wall_m - r_m - 2 * sigma_m, 0, 0.015625),
+               Eigen::Vector3d(wall_m - r_m - sigma_m, 0, 0.015625), Eigen::Vector3d(wall_m - r_m, 0, 0.015625)},
+              {Eigen::Vector3d(1.0, 0, 0.1), Eigen::Vector3d(0, 0, 0.1), Eigen::Vector3d(0, 0, 0.1)});
   p.mass_kg[0] *= 1000.0;
   hard::HardEngine engine(s, p);
   auto vertical_momentum = [&] {
     const State st = engine.state();
-    return s.host.mass_kg * st.observation.host.v_m_s + momentum(st.particles).z();
+    return s.host.mass_kg * st.observation.host.v_m_s + test::momentum(st.particles).z();
   };
   const double p0 = vertical_momentum();
   const double e0 = engine.observe().energy.stored_J();

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "pdamp/hard/event_queue.hpp"
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
 #include "pdamp/scenario/scenario_loader.hpp"
@@ -69,6 +71,46 @@ inline Particles spheres(const std::vector<Eigen::Vector3d>& positions, const st
     p.mass_kg[k] = density_kg_m3 * 4.0 / 3.0 * std::numbers::pi * radius_m * radius_m * radius_m;
   }
   return p;
+}
+
+/// Of any spheres with the fields of Particles (PackedParticles too): their kinetic
+/// energy, translational and rotational.
+template <class Spheres>
+double kinetic_energy(const Spheres& p) {
+  double e = 0;
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    e += 0.5 * p.mass_kg[i] * p.velocity_m_s.col(i).squaredNorm() +
+         0.5 * p.moment_of_inertia(i) * p.angular_velocity_rad_s.col(i).squaredNorm();
+  }
+  return e;
+}
+/// Their momentum.
+template <class Spheres>
+Eigen::Vector3d momentum(const Spheres& p) {
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  for (Eigen::Index i = 0; i < p.size(); ++i) total += p.mass_kg[i] * p.velocity_m_s.col(i);
+  return total;
+}
+/// Their angular momentum about the origin, spins included.
+template <class Spheres>
+Eigen::Vector3d angular_momentum(const Spheres& p) {
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    total += p.mass_kg[i] * Eigen::Vector3d(p.position_m.col(i)).cross(Eigen::Vector3d(p.velocity_m_s.col(i))) +
+             p.moment_of_inertia(i) * p.angular_velocity_rad_s.col(i);
+  }
+  return total;
+}
+
+/// Every event in a hard engine's queue, earliest first (the queue is emptied).
+inline std::vector<hard::Event> drain(hard::EventQueue& queue) {
+  std::vector<hard::Event> events;
+  const auto all = [](const hard::Event&) { return true; };
+  for (const hard::Event* e = queue.top(all); e; e = queue.top(all)) {
+    events.push_back(*e);
+    queue.pop();
+  }
+  return events;
 }
 
 /// The 1D Hertz-dashpot contact m* δ'' = −max(0, k δ^{3/2} + c δ'), advanced by RK4.

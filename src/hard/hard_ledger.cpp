@@ -30,8 +30,8 @@ EngineStatistics HardStatistics::named() const {
           {"prediction_rebuilds", rebuilds}};
 }
 
-void HardLedger::add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J, const HostTrajectory& trajectory,
-                                       double t_s, const Riders& riders) const {
+void HardLedger::add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J,
+                                       const HostTrajectory& trajectory, double t_s, const Riders& riders) const {
   viscous_sum_J += trajectory.viscous_dissipation_J(t_host_booked_s_, t_s);
   excitation_sum_J += trajectory.excitation_work_J(t_host_booked_s_, t_s);
   if (riders.carried_by_prescribed_host) {

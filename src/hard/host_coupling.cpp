@@ -178,8 +178,7 @@ void HostCoupling::predict_relative(int i, std::size_t first_level, double t_s) 
     if (level + 1 < tiers_.size()) tiers_[level + 1].members.insert(i);
   }
   touching_.insert(i);
-  const HostContact exact =
-      host_contact(i, std::min(horizon, t + tiers_.back().horizon_s), 0.0, t, &riders_searched_);
+  const HostContact exact = host_contact(i, std::min(horizon, t + tiers_.back().horizon_s), 0.0, t, &riders_searched_);
   if (exact.when.contact) {
     flight_.push({exact.when.t_s, i, exact.partner, stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
@@ -321,9 +320,8 @@ HostCoupling::HostContact HostCoupling::host_contact(int i, double end_s, double
     const double gap = cap_gap_m(f, r + margin_m, top, height, host, gravity_m_s2_, t);
     const double rate = top ? -velocity.z() : velocity.z();
     if (stays_apart(gap, rate, std::abs(gravity_m_s2_.z()) + acceleration_bound, end_s - t, tolerance)) continue;
-    consider(
-        cap_contact(f, r + margin_m, top, height, trajectory_, host, gravity_m_s2_, t, end_s, tolerance, closing),
-        top ? EventKind::top_cap : EventKind::bottom_cap, 0);
+    consider(cap_contact(f, r + margin_m, top, height, trajectory_, host, gravity_m_s2_, t, end_s, tolerance, closing),
+             top ? EventKind::top_cap : EventKind::bottom_cap, 0);
   }
   if (riding_count_ == 0) return best;
   // Riders within reach of the sphere's host-frame path until the host has moved at most
@@ -347,9 +345,9 @@ HostCoupling::HostContact HostCoupling::host_contact(int i, double end_s, double
     const double contact_distance = r + particles.radius_m[j] + margin_m;
     const double gap = (centre - rider).norm() - contact_distance;
     if (stays_apart(gap, -speed, rider_curvature, span, tolerance)) return;
-    consider(rider_contact(f, rider, contact_distance, trajectory_, host, gravity_m_s2_, t, window_end, tolerance,
-                           closing),
-             EventKind::rider, j);
+    consider(
+        rider_contact(f, rider, contact_distance, trajectory_, host, gravity_m_s2_, t, window_end, tolerance, closing),
+        EventKind::rider, j);
   });
   consider({window_end, false}, EventKind::host_margin, 0);
   return best;

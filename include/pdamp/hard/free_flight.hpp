@@ -125,8 +125,8 @@ class FreeFlight {
   EventQueue& queue() { return queue_; }
   void push(const Event& event) { queue_.push(event); }
   /// Whether an event is still what would be predicted now (the host's events carry
-  /// `host_epoch`'s value when predicted).
-  [[gnu::always_inline]] bool is_current(const Event& event, std::uint32_t host_epoch) const;
+  /// `host_epoch`'s value when predicted; by reference, as it is read only for those).
+  [[gnu::always_inline]] bool is_current(const Event& event, const std::uint32_t& host_epoch) const;
   /// Predicts free sphere i's events without the host anew at t_s (after replacing its
   /// host-dependent event): its next face crossing, its contacts with the free spheres in
   /// `new_cells` (an Around, or the Layer a face crossing entered: its other neighbours'
@@ -168,7 +168,7 @@ class FreeFlight {
   bool prefetch_cells_ = false;
 };
 
-inline bool FreeFlight::is_current(const Event& e, std::uint32_t host_epoch) const {
+inline bool FreeFlight::is_current(const Event& e, const std::uint32_t& host_epoch) const {
   if (e.kind == EventKind::bed_release) return host_epoch == e.count_j;
   // Where count_j came from, chosen without a jump table (its jumps mispredict).
   const bool stamped = carries_host_stamp(e.kind);
@@ -200,8 +200,9 @@ inline bool FreeFlight::predict(int i, std::span<const int> new_cells, double t,
   const FaceTimes xy = time_to_faces(Lanes2{x.x() - grid_.x_lower_m(c.ix), x.y() - grid_.x_lower_m(c.iy)},
                                      Lanes2{grid_.x_lower_m(c.ix + 1) - x.x(), grid_.x_lower_m(c.iy + 1) - x.y()},
                                      Lanes2{v.x(), v.y()}, Lanes2{g.x(), g.y()});
-  const Lanes2 to_lower_z = time_to_plane(Lanes2{x.z() - grid_.z_lower_m(c.iz), x.z() - r - host.z_m - host.bed_depth_m},
-                                          Lanes2{v.z(), v.z() - envelope}, Lanes2{g.z(), g.z()});
+  const Lanes2 to_lower_z =
+      time_to_plane(Lanes2{x.z() - grid_.z_lower_m(c.iz), x.z() - r - host.z_m - host.bed_depth_m},
+                    Lanes2{v.z(), v.z() - envelope}, Lanes2{g.z(), g.z()});
   const Lanes2 to_upper_z = time_to_plane(
       Lanes2{grid_.z_lower_m(c.iz + 1) - x.z(), host.z_m + cavity_.height_m() - host.bed_depth_m - x.z() - r},
       Lanes2{-v.z(), -v.z() - envelope}, Lanes2{-g.z(), -g.z()});

@@ -20,10 +20,10 @@ namespace pdamp::hard {
 /// What the hard engine counts: events by kind, what the resting bed and the jams did,
 /// the host's impulses and the host-dependent predictions they cost.
 struct HardStatistics {
-  std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0,
-               host_margin = 0, stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, jammed = 0,
-               host_impulses = 0, jam_merges = 0, jam_merged_spheres = 0, jam_stuck_to_host = 0,
-               touching_repredictions = 0, touching_deferrals = 0, rebuilds = 0;
+  std::int64_t sphere_sphere = 0, side_wall = 0, cap = 0, rider = 0, cell_crossing = 0, host_check = 0, host_margin = 0,
+               stale = 0, rests = 0, knocked_off = 0, bed_releases = 0, jammed = 0, host_impulses = 0, jam_merges = 0,
+               jam_merged_spheres = 0, jam_stuck_to_host = 0, touching_repredictions = 0, touching_deferrals = 0,
+               rebuilds = 0;
   /// Of each tier (near, imminent, close): its sweeps and the predictions they redid.
   std::array<std::int64_t, 3> tier_sweeps{}, tier_repredictions{};
 
@@ -65,8 +65,8 @@ class HardLedger {
 
  private:
   /// Adds what the host did on `trajectory` from the last booking to t_s.
-  void add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J, const HostTrajectory& trajectory, double t_s,
-                             const Riders& riders) const;
+  void add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J, const HostTrajectory& trajectory,
+                             double t_s, const Riders& riders) const;
 
   double t_host_booked_s_ = 0.0;
 };

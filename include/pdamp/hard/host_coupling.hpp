@@ -60,7 +60,7 @@ class HostCoupling {
   bool prescribed() const { return model_.has_infinite_mass(); }
   const HostTrajectory& trajectory() const { return trajectory_; }
   /// Bumped whenever the trajectory is replaced or every prediction forgotten.
-  std::uint32_t epoch() const { return epoch_; }
+  const std::uint32_t& epoch() const { return epoch_; }
   /// trajectory().at(t_s), which every prediction needs: the two of a collision share it.
   HostState now(double t_s) const {
     // A host that cannot move (speed bound 0: fixed walls) is where it was: its trig need
@@ -96,9 +96,9 @@ class HostCoupling {
   bool rests(double leaving_m_s, double normal_z_from_support, double t_s) const;
   /// What attach did.
   struct Attached {
-    HostState host_after;           ///< the host's state after the sticking collision
-    bool bed_deeper;                ///< beyond the depth the guards assumed: predict all anew
-    Eigen::Vector3d lab_position_m; ///< where the sphere came to rest
+    HostState host_after;            ///< the host's state after the sticking collision
+    bool bed_deeper;                 ///< beyond the depth the guards assumed: predict all anew
+    Eigen::Vector3d lab_position_m;  ///< where the sphere came to rest
   };
   /// Free sphere i (its record at t_s) comes to rest on the bed on `side`: a perfectly
   /// inelastic, sticking collision with the host (the normal loss booked as impact, the
@@ -212,9 +212,9 @@ class HostCoupling {
     std::uint32_t epoch;
     HostState state;
   };
-  mutable Now now_{-never, 0, {}};           ///< now()'s last answer
-  double speed_envelope_m_s_;                ///< ≥ the speed bound of every trajectory since the last rebuild
-  double trajectory_riding_mass_kg_ = 0.0;   ///< the riding mass trajectory_ was built with
+  mutable Now now_{-never, 0, {}};          ///< now()'s last answer
+  double speed_envelope_m_s_;               ///< ≥ the speed bound of every trajectory since the last rebuild
+  double trajectory_riding_mass_kg_ = 0.0;  ///< the riding mass trajectory_ was built with
 
   // The bed.
   double riding_mass_kg_ = 0.0;

@@ -213,6 +213,41 @@ TEST_CASE("the hard engine's benchmark times a small gas and says what the run w
   CHECK(figure("core share ") >= figure("lowest "));
 }
 
+TEST_CASE("tools/check-same-bits.sh: a binary against itself gives the same bits, a changed law does not") {
+  // 20 spheres for 0.05 s, so that settling the bed and the runs take a moment; the
+  // changed binary is pdamp with another e_n at the walls.
+  test::TempDir dir("same-bits");
+  {
+    std::ofstream scenario(dir / "few.ini");
+    scenario << "[particles]\ncount = 20\ndiameter_m = 0.002\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.01\n";
+    std::ofstream changed(dir / "changed-pdamp");
+    changed << "#!/bin/sh\nexec " << PDAMP_EXECUTABLE << " \"$@\" --set hard_wall.en=0.7\n";
+  }
+  std::filesystem::permissions(dir / "changed-pdamp", std::filesystem::perms::owner_exec,
+                               std::filesystem::perm_options::add);
+  const std::string script = (test::source_dir() / "tools" / "check-same-bits.sh").string();
+  const std::string cases = (dir / "few.ini").string() + "@0.05";
+  const Result same = pdamp_cli({PDAMP_EXECUTABLE, PDAMP_EXECUTABLE, "hard", cases}, dir, script);
+  INFO(same.out, same.err);
+  CHECK(same.code == 0);
+  CHECK(same.out.find("few@0.05: same bits (51 samples") != std::string::npos);
+  const Result changed =
+      pdamp_cli({"--keep", (dir / "kept").string(), PDAMP_EXECUTABLE, (dir / "changed-pdamp").string(), "hard", cases},
+                dir, script);
+  INFO(changed.out, changed.err);
+  CHECK(changed.code == 1);
+  CHECK(changed.out.find("few@0.05: DIFFERENT") != std::string::npos);
+  CHECK(changed.out.find("samples: dissipated_impact_J differs") != std::string::npos);
+  CHECK(std::filesystem::exists(dir / "kept" / "few@0.05" / "new.sqlite"));
+  // Usage errors: exit 2, naming the problem.
+  const Result unknown = pdamp_cli({PDAMP_EXECUTABLE, PDAMP_EXECUTABLE, "hard", "no-such-case"}, dir, script);
+  CHECK(unknown.code == 2);
+  CHECK(unknown.err.find("no-such-case") != std::string::npos);
+  const Result model = pdamp_cli({PDAMP_EXECUTABLE, PDAMP_EXECUTABLE, "stiff", cases}, dir, script);
+  CHECK(model.code == 2);
+  CHECK(model.err.find("MODEL 'stiff'") != std::string::npos);
+}
+
 TEST_CASE("runs, show, check, keys and version") {
   test::TempDir dir("cli-list");
   const auto db = (dir / "runs.sqlite").string();

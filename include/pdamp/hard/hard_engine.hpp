@@ -94,9 +94,13 @@ class HardEngine final : public Engine {
   // The host.
   /// A sphere-host collision outcome applied to sphere i (arm r n) and the host.
   void apply_host_impulse(int i, const Eigen::Vector3d& normal, const CollisionOutcome& outcome, const HostState& host);
+  /// The host moves on from `start` (HostCoupling::restart), and every prediction is
+  /// made anew if it may now move faster than the far spheres' checks assumed.
   void restart_host(HostState start);
   /// After a collision with its support (normal from it), sphere i comes to rest or is predicted anew.
   void rest_if_slow(int i, const Eigen::Vector3d& normal_from_support, const HostState& host);
+  /// Sphere i comes to rest on the bed on `side` (+1 the floor, −1 the top cap): the
+  /// host restarts with it, and the near spheres that could reach it are predicted anew.
   void attach(int i, int side);
 
   FreeFlight flight_;

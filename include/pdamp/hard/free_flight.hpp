@@ -135,8 +135,7 @@ class FreeFlight {
   /// envelope allows (if before the crossing). True if it may be within reach now: then
   /// its host-dependent event is HostCoupling's to predict. Inline, and always: the
   /// engine's prediction of a sphere (this, then the host's part) then compiles as one
-  /// function, where a call of its own cost the gas 2 % more instructions per collision
-  /// (tools/bench/HISTORY.md).
+  /// function; as a call of its own it costs the gas instructions (tools/bench/HISTORY.md).
   [[gnu::always_inline]] bool predict(int i, std::span<const int> new_cells, double t_s, HostReach host);
   /// Whether the engine asks for neighbours' records and cells ahead of use: where they
   /// outgrow half the L2 cache.

@@ -159,8 +159,8 @@ class FreeFlight {
   double max_radius_m_;
   /// Whether predict asks for all the neighbours' records at once before screening them:
   /// only where the records outgrow half the L2 cache (where they are in cache, the
-  /// requests only cost instructions). Last among predict's members: their layout is
-  /// sensitive (tools/bench/HISTORY.md).
+  /// requests only cost instructions). After predict's members: among them it shifts
+  /// their layout and slows the gas (tools/bench/HISTORY.md).
   bool prefetch_records_ = false;
   /// Whether a sphere–sphere collision asks for the cells around both spheres before it
   /// predicts them: likewise only where the cells outgrow half the L2 cache.

@@ -236,12 +236,7 @@ TEST_CASE("books: a prescribed host's work on its riders is the change of their 
 }
 
 TEST_CASE("books: every count has a name of its own, and collisions are the four kinds of contact") {
-  HardStatistics counts;
-  counts.sphere_sphere = 1;
-  counts.side_wall = 20;
-  counts.cap = 300;
-  counts.rider = 4000;
-  counts.cell_crossing = 50000;
+  const HardStatistics counts{.sphere_sphere = 1, .side_wall = 20, .cap = 300, .rider = 4000, .cell_crossing = 50000};
   CHECK(counts.collisions() == 4321);
   const EngineStatistics named = counts.named();
   std::vector<std::string> names;

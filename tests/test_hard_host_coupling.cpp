@@ -25,7 +25,10 @@ struct Parts {
   FreeFlight flight;
   HardLedger ledger;
   HostCoupling host;
-  Parts(const Scenario& s, const Particles& p) : flight(s, p), host(s, p, flight, ledger) { flight.start(p); }
+  Parts(const Scenario& s, const Particles& p)
+      : flight(s, p), ledger(static_cast<int>(p.size())), host(s, p, flight, ledger) {
+    flight.start(p);
+  }
 };
 
 constexpr double r_m = 0.0005;
@@ -140,6 +143,9 @@ TEST_CASE("riders: a sphere comes to rest on the floor of a free host, which tak
   CHECK(parts.ledger.impact_J == doctest::Approx(0.5 * reduced * (vz - host_v) * (vz - host_v)).epsilon(1e-14));
   CHECK(parts.ledger.friction_J ==
         doctest::Approx(0.5 * m * (0.01 * 0.01 + 0.02 * 0.02) + 0.5 * 0.4 * m * r_m * r_m * 14.0).epsilon(1e-14));
+  // All of it the sphere's own.
+  CHECK(parts.ledger.by_sphere.impact_J[0] == parts.ledger.impact_J);
+  CHECK(parts.ledger.by_sphere.friction_J[0] == parts.ledger.friction_J);
   // The host carries it from now on.
   REQUIRE(parts.host.restart(attached.host_after, 0.0));
   CHECK(parts.host.carried_mass_kg() == host_mass + m);
@@ -205,14 +211,14 @@ TEST_CASE("books: the host's damping and excitation booked in stretches add up t
   const HostModel model(s);
   const HostTrajectory trajectory(model, 0.0, model.initial_state());
   const Riders none{0.0, -9.81, false};
-  HardLedger whole, stretches;
+  HardLedger whole(0), stretches(0);
   whole.book_host(trajectory, 0.1, none);
   for (int k = 1; k <= 10; ++k) stretches.book_host(trajectory, 0.01 * k, none);
   CHECK(whole.viscous_J > 0.0);
   CHECK(stretches.viscous_J == doctest::Approx(whole.viscous_J).epsilon(1e-12));
   CHECK(stretches.excitation_J == doctest::Approx(whole.excitation_J).epsilon(1e-12));
   // An observation adds what the trajectory did since the last booking.
-  HardLedger booked;
+  HardLedger booked(0);
   booked.book_host(trajectory, 0.04, none);
   EnergyLedger observed;
   booked.write_to(observed, trajectory, 0.1, none);
@@ -226,7 +232,7 @@ TEST_CASE("books: a prescribed host's work on its riders is the change of their 
   const HostModel model(s);
   const HostTrajectory trajectory(model, 0.0, model.initial_state());
   const Riders riders{0.003, -9.81, true};
-  HardLedger ledger;
+  HardLedger ledger(0);
   ledger.book_host(trajectory, 0.007, riders);
   const HostState a = trajectory.at(0.0), b = trajectory.at(0.007);
   const double expected =

@@ -102,7 +102,7 @@ TEST_CASE("jam merge: a three-sphere wedge becomes one rigid body with its momen
     PackedParticles p(wedge(seed));
     const Eigen::Vector3d p0 = test::momentum(p), l0 = test::angular_momentum(p);
     const double e0 = test::kinetic_energy(p);
-    HardLedger ledger;
+    HardLedger ledger(3);
     jams.merge_rigidly(merged_wedge_cluster(jams), p, ledger);
     CHECK((test::momentum(p) - p0).norm() <= 1e-15 * p0.norm());
     CHECK((test::angular_momentum(p) - l0).norm() <= 1e-14 * l0.norm());
@@ -120,6 +120,10 @@ TEST_CASE("jam merge: a three-sphere wedge becomes one rigid body with its momen
     CHECK(ledger.impact_J + ledger.friction_J == doctest::Approx(loss).epsilon(1e-12));
     CHECK(ledger.impact_J >= 0.0);
     CHECK(ledger.friction_J >= 0.0);
+    // Each sphere's share is the energy its own motion lost: they add up to the books.
+    CHECK(ledger.by_sphere.impact_J.sum() == doctest::Approx(ledger.impact_J).epsilon(1e-14));
+    CHECK(ledger.by_sphere.friction_J.sum() == doctest::Approx(ledger.friction_J).epsilon(1e-14));
+    CHECK(ledger.by_sphere.impact_J.minCoeff() >= 0.0);
   }
 }
 
@@ -130,7 +134,7 @@ TEST_CASE("jam merge: spheres closing along their line of centres without spin l
   jams.note_collision(0, 1, 0.5);
   jams.note_collision(1, 2, 0.5);
   const double e0 = test::kinetic_energy(p);
-  HardLedger ledger;
+  HardLedger ledger(3);
   jams.merge_rigidly(jams.cluster_of(1, [](int) { return false; }), p, ledger);
   for (int i = 0; i < 3; ++i) CHECK(p.velocity_m_s.col(i).isApprox(Eigen::Vector3d(0.8 / 3, 0, 0), 1e-15));
   CHECK(ledger.friction_J == 0.0);
@@ -145,7 +149,7 @@ TEST_CASE("jam sticking: a merged wedge held by a cap sticks to a free host, mom
     JamResolver jams(3);
     PackedParticles p(wedge(7));
     JamResolver::Cluster cluster = merged_wedge_cluster(jams);
-    HardLedger ledger;
+    HardLedger ledger(3);
     jams.merge_rigidly(cluster, p, ledger);
     cluster.hold = hold;
     const HardLedger merged = ledger;
@@ -168,6 +172,10 @@ TEST_CASE("jam sticking: a merged wedge held by a cap sticks to a free host, mom
     // Impact is the part normal to the holding wall: the horizontal motion at the side
     // wall, the vertical at a cap; the rest (and the spin) is friction.
     CHECK(impact == doctest::Approx(hold == JamResolver::held_by_side_wall ? horizontal_J : vertical_J).epsilon(1e-14));
+    // The spheres' shares of it add up to the books.
+    CHECK(ledger.by_sphere.impact_J.sum() - merged.by_sphere.impact_J.sum() == doctest::Approx(impact).epsilon(1e-12));
+    CHECK(ledger.by_sphere.friction_J.sum() - merged.by_sphere.friction_J.sum() ==
+          doctest::Approx(friction).epsilon(1e-12));
   }
 }
 
@@ -175,7 +183,7 @@ TEST_CASE("jam sticking: a prescribed host keeps its velocity and does the work 
   JamResolver jams(3);
   PackedParticles p(wedge(3));
   const JamResolver::Cluster cluster = merged_wedge_cluster(jams);
-  HardLedger ledger;
+  HardLedger ledger(3);
   jams.merge_rigidly(cluster, p, ledger);
   const double e0 = test::kinetic_energy(p);
   const HardLedger merged = ledger;

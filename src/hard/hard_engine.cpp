@@ -18,6 +18,7 @@ const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 
 HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const RestitutionTable* calibration)
     : flight_(scenario, initial),
+      books_(static_cast<int>(initial.size())),
       host_(scenario, initial, flight_, books_),
       jams_(static_cast<int>(initial.size())),
       laws_(scenario, calibration),
@@ -276,7 +277,7 @@ void HardEngine::collide_spheres(int i, int j) {
   particles.velocity_m_s.col(j) -= p / mj;
   particles.angular_velocity_rad_s.col(i) += ri * torque_arm / particles.moment_of_inertia(i);
   particles.angular_velocity_rad_s.col(j) += rj * torque_arm / particles.moment_of_inertia(j);
-  books_.book(out);
+  books_.book(out, i, j);
   flight_.new_trajectory(i);
   flight_.new_trajectory(j);
   predict(i, around_i);
@@ -303,14 +304,14 @@ void HardEngine::merge_jam(int i) {
   for (const int k : cluster.members) predict(k);
 }
 
-void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out,
-                                    const HostState& host) {
+void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out, const HostState& host,
+                                    int rider) {
   PackedParticles& particles = flight_.particles();
   const Eigen::Vector3d& p = out.impulse_N_s;
   const double r = particles.radius_m[i];
   particles.velocity_m_s.col(i) += p / particles.mass_kg[i];
   particles.angular_velocity_rad_s.col(i) += r * n.cross(p) / particles.moment_of_inertia(static_cast<Eigen::Index>(i));
-  books_.book(out);
+  books_.book(out, i, rider);
   flight_.new_trajectory(i);
   host_.leave_sets(i);
   if (host_.prescribed()) {
@@ -389,7 +390,7 @@ void HardEngine::collide_rider(int i, int j) {
   const Mobility mobility = sphere_mobility(particles.mass_kg[i]) + Mobility{0, 0, host_.inverse_mass_1_kg()};
   const HardContactLaw law = law_for(approach, false, i, -1);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
-  apply_host_impulse(i, n, out, host);
+  apply_host_impulse(i, n, out, host, j);
   rest_if_slow(i, -n, host_.trajectory().at(t_s_));
 }
 

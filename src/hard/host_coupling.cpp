@@ -113,10 +113,13 @@ HostCoupling::Attached HostCoupling::attach(int i, int side, double t_s) {
   const double m = particles.mass_kg[i];
   const Eigen::Vector3d v = particles.velocity_m_s.col(i);
   // The normal part of the loss is impact, the sliding and spinning that stop are friction.
-  ledger_.friction_J += 0.5 * m * (v.x() * v.x() + v.y() * v.y()) +
-                        0.5 * particles.moment_of_inertia(i) * particles.angular_velocity_rad_s.col(i).squaredNorm();
+  const double friction_J =
+      0.5 * m * (v.x() * v.x() + v.y() * v.y()) +
+      0.5 * particles.moment_of_inertia(i) * particles.angular_velocity_rad_s.col(i).squaredNorm();
   const VerticalSticking sticking = stick_vertically(m, v.z(), host.v_m_s, prescribed(), carried_mass_kg());
+  ledger_.friction_J += friction_J;
   ledger_.impact_J += sticking.loss_J;
+  ledger_.book_sphere(i, sticking.loss_J, friction_J);
   if (prescribed()) ledger_.excitation_J += sticking.host_work_J;
   const Eigen::Vector3d lab_position = particles.position_m.col(i);
   flight_.leave_cell(i);

@@ -92,15 +92,19 @@ void JamResolver::merge_rigidly(const Cluster& cluster, PackedParticles& particl
       total += reduced * u.squaredNorm();
     }
   }
+  const double impact_share = total > 0.0 ? normal / total : 1.0;
   double loss = 0.0;
   for (const int k : members) {
+    // Each sphere's part of the loss is the energy of its own motion removed.
     const Eigen::Vector3d v = velocity + spin.cross(particles.position_m.col(k) - centre);
-    loss += 0.5 * particles.mass_kg[k] * (particles.velocity_m_s.col(k) - v).squaredNorm() +
-            0.5 * particles.moment_of_inertia(k) * (particles.angular_velocity_rad_s.col(k) - spin).squaredNorm();
+    const double sphere_loss =
+        0.5 * particles.mass_kg[k] * (particles.velocity_m_s.col(k) - v).squaredNorm() +
+        0.5 * particles.moment_of_inertia(k) * (particles.angular_velocity_rad_s.col(k) - spin).squaredNorm();
+    loss += sphere_loss;
+    ledger.book_sphere(k, impact_share * sphere_loss, (1.0 - impact_share) * sphere_loss);
     particles.velocity_m_s.col(k) = v;
     particles.angular_velocity_rad_s.col(k) = spin;
   }
-  const double impact_share = total > 0.0 ? normal / total : 1.0;
   ledger.impact_J += impact_share * loss;
   ledger.friction_J += (1.0 - impact_share) * loss;
 }
@@ -127,6 +131,14 @@ double JamResolver::stick_to_host(const Cluster& cluster, const HostState& host,
   ledger.impact_J += (side ? horizontal_J : 0.0) + (cap ? vertical.loss_J : 0.0);
   ledger.friction_J += spin_J + (side ? 0.0 : horizontal_J) + (cap ? 0.0 : vertical.loss_J);
   for (const int k : members) {
+    // Each sphere's part: its own spin and motion relative to the body, and its mass's
+    // share of the body's.
+    const double m = particles.mass_kg[k], share = m / mass;
+    const double sphere_spin_J =
+        0.5 * m * (particles.velocity_m_s.col(k) - velocity).squaredNorm() +
+        0.5 * particles.moment_of_inertia(k) * particles.angular_velocity_rad_s.col(k).squaredNorm();
+    ledger.book_sphere(k, share * ((side ? horizontal_J : 0.0) + (cap ? vertical.loss_J : 0.0)),
+                       sphere_spin_J + share * ((side ? 0.0 : horizontal_J) + (cap ? 0.0 : vertical.loss_J)));
     particles.velocity_m_s.col(k) = vertical.host_v_m_s * Eigen::Vector3d::UnitZ();
     particles.angular_velocity_rad_s.col(k).setZero();
   }

@@ -43,6 +43,7 @@ class HardEngine final : public Engine {
   void advance_to(double t_s) override;
   Observation observe() const override;
   State state() const override;
+  SphereDissipation dissipation_by_sphere() const override { return books_.by_sphere; }
   double time_step_s() const override { return 0.0; }
   EngineStatistics statistics() const override;
   std::vector<std::string> warnings() const override;
@@ -92,8 +93,10 @@ class HardEngine final : public Engine {
   void release_bed();
 
   // The host.
-  /// A sphere-host collision outcome applied to sphere i (arm r n) and the host.
-  void apply_host_impulse(int i, const Eigen::Vector3d& normal, const CollisionOutcome& outcome, const HostState& host);
+  /// A sphere-host collision outcome applied to sphere i (arm r n) and the host; its loss
+  /// is shared with `rider` if a riding sphere took the impulse for the host.
+  void apply_host_impulse(int i, const Eigen::Vector3d& normal, const CollisionOutcome& outcome, const HostState& host,
+                          int rider = -1);
   /// The host moves on from `start` (HostCoupling::restart), and every prediction is
   /// made anew if it may now move faster than the far spheres' checks assumed.
   void restart_host(HostState start);

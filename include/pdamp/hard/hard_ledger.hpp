@@ -1,6 +1,6 @@
 #pragma once
-/// The hard engine's books: the energy dissipated, by mechanism, and the excitation's work
-/// (J), and its counts of what happened (run_statistics).
+/// The hard engine's books: the energy dissipated, by mechanism and by sphere, and the
+/// excitation's work (J), and its counts of what happened (run_statistics).
 ///
 /// Collisions book their losses as they happen. The host's damper and its excitation act
 /// all the time: they are booked in closed form over each stretch of one host trajectory,
@@ -47,14 +47,32 @@ struct Riders {
 
 class HardLedger {
  public:
+  /// Books for `particle_count` spheres.
+  explicit HardLedger(int particle_count)
+      : by_sphere{Eigen::VectorXd::Zero(particle_count), Eigen::VectorXd::Zero(particle_count)} {}
+
   /// Booked so far (J).
   double impact_J = 0.0, friction_J = 0.0, viscous_J = 0.0, excitation_J = 0.0;
+  /// The impact and friction losses by sphere (Engine::dissipation_by_sphere).
+  SphereDissipation by_sphere;
   HardStatistics counts;
 
-  /// A collision's loss.
-  void book(const CollisionOutcome& outcome) {
+  /// A collision's loss: all of it sphere i's (against a wall), or half each i's and j's
+  /// (a sphere, or a riding sphere that took the impulse for the host).
+  void book(const CollisionOutcome& outcome, int i, int j = -1) {
     impact_J += outcome.impact_J;
     friction_J += outcome.friction_J;
+    if (j < 0) {
+      book_sphere(i, outcome.impact_J, outcome.friction_J);
+    } else {
+      book_sphere(i, 0.5 * outcome.impact_J, 0.5 * outcome.friction_J);
+      book_sphere(j, 0.5 * outcome.impact_J, 0.5 * outcome.friction_J);
+    }
+  }
+  /// Sphere i's share of a loss whose totals are booked apart.
+  void book_sphere(int i, double impact_share_J, double friction_share_J) {
+    by_sphere.impact_J[i] += impact_share_J;
+    by_sphere.friction_J[i] += friction_share_J;
   }
   /// The host's damper and excitation on `trajectory` from the last booking to t_s, with
   /// `riders` on it.

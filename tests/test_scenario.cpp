@@ -5,6 +5,10 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
+#include <utility>
+#include <vector>
 
 #include "pdamp/errors.hpp"
 #include "test_support.hpp"
@@ -28,6 +32,38 @@ bool contains(const std::string& haystack, const std::string& needle) {
   return haystack.find(needle) != std::string::npos;
 }
 
+/// Every key and its default as `pdamp keys` prints them ("  section.key = default [unit]";
+/// "= other.key" for a default that is another key's value, "(none)" for none).
+std::vector<std::pair<std::string, std::string>> documented_defaults() {
+  std::ostringstream listing;
+  describe_scenario_keys(listing);
+  std::istringstream lines(listing.str());
+  std::vector<std::pair<std::string, std::string>> keys;
+  for (std::string line; std::getline(lines, line);) {
+    if (!line.starts_with("  ") || line[2] == ' ') continue;  // headers and help lines
+    const auto eq = line.find(" = ");
+    std::string text = line.substr(eq + 3);
+    if (text.ends_with(']')) text.erase(text.rfind(" ["));
+    keys.emplace_back(line.substr(2, eq - 2), text == "(none)" ? "" : text);
+  }
+  return keys;
+}
+
+/// section.key -> value of every line of a canonical text.
+std::map<std::string, std::string> canonical_values(const std::string& canonical_text) {
+  std::istringstream lines(canonical_text);
+  std::map<std::string, std::string> values;
+  std::string section;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.starts_with('[')) {
+      section = line.substr(1, line.size() - 2);
+    } else if (const auto eq = line.find(" = "); eq != std::string::npos) {
+      values[section + "." + line.substr(0, eq)] = line.substr(eq + 3);
+    }
+  }
+  return values;
+}
+
 }  // namespace
 
 TEST_CASE("an empty scenario is the paper's Table 1 case") {
@@ -47,7 +83,29 @@ TEST_CASE("an empty scenario is the paper's Table 1 case") {
   CHECK_FALSE(s.run.dt_s.has_value());
   CHECK(s.hard_resting.rest_speed_m_s == 0.005);
   CHECK(s.hard_resting.elastic_speed_m_s == 1e-4);
+  // The Table 1 soft law's restitution at a 0.5 m/s impact, sphere-sphere and sphere-wall.
+  CHECK(s.hard_particle.en == 0.71);
+  CHECK(s.hard_wall.en == 0.80);
   CHECK(scenario_from("[hard]\nrest_speed_m_s = 0.002\n").hard_resting.rest_speed_m_s == 0.002);
+}
+
+TEST_CASE("every key's documented default is what a scenario without keys resolves to, and a Scenario's own") {
+  const Scenario loaded = parse_scenario("", "", "no keys");
+  const auto resolved = canonical_values(loaded.canonical_text);
+  const auto documented = documented_defaults();
+  CHECK(documented.size() == resolved.size());
+  std::map<std::string, std::string> documented_value;
+  for (const auto& [key, text] : documented) {
+    CAPTURE(key);
+    const std::string value = text.starts_with("= ") ? documented_value.at(text.substr(2)) : text;
+    documented_value[key] = value;
+    REQUIRE(resolved.contains(key));
+    CHECK(resolved.at(key) == value);
+  }
+  // The C++ API's default-constructed Scenario is the same scenario, every member.
+  Scenario constructed;
+  constructed.canonical_text = loaded.canonical_text;
+  CHECK(loaded == constructed);
 }
 
 TEST_CASE("sections, comments, overrides and inherited wall laws") {
@@ -95,7 +153,7 @@ TEST_CASE("bad values are rejected with the key, the value and what is valid") {
       {"[run]\ndt_s = fast\n", "run.dt_s", "'fast'", "'auto'"},
       {"[run]\nsample_interval_s = 3\n", "run.sample_interval_s", "'3'", "run.duration_s"},
       {"[excitation]\nmode = shake\n", "excitation.mode", "'shake'", "free, base, force, prescribed"},
-      {"[hard]\nrestitution = fitted\n", "hard.restitution", "'fitted'", "constant or calibrated"},
+      {"[hard]\nrestitution = fitted\n", "hard.restitution", "'fitted'", "one of constant, calibrated"},
       {"[particles]\ndiameter_m = 0.03\n", "particles.diameter_m", "'0.03'", "do not fit"},
       {"[particles]\ncount = 100000\n", "particles.count", "'100000'", "at most"},
   };

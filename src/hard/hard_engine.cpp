@@ -125,9 +125,7 @@ Observation HardEngine::observe() const {
              particles.angular_velocity_rad_s.col(i), flight_.gravity_m_s2());
   }
   sums.write_to(e);
-  e.host_counts = !model.has_infinite_mass();
-  e.host_kinetic_J = 0.5 * model.mass_kg() * o.host.v_m_s * o.host.v_m_s;
-  e.spring_potential_J = model.spring_energy_J(t_s_, o.host.z_m);
+  model.write_energy_to(e, t_s_, o.host);
   // Everything is booked up to t_s_ after advance_to; the books add the rest for an
   // observation taken before the first advance.
   books_.write_to(e, host_.trajectory(), t_s_, host_.riders());

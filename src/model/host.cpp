@@ -66,6 +66,14 @@ double HostModel::spring_energy_J(double t_s, double z_m) const {
   return 0.5 * stiffness_N_m_ * stretch * stretch;
 }
 
+double HostModel::natural_angular_frequency_rad_s() const { return std::sqrt(stiffness_N_m_ / mass_kg_); }
+
+void HostModel::write_energy_to(EnergyLedger& ledger, double t_s, const HostState& s) const {
+  ledger.host_counts = !has_infinite_mass();
+  ledger.host_kinetic_J = 0.5 * mass_kg_ * s.v_m_s * s.v_m_s;
+  ledger.spring_potential_J = spring_energy_J(t_s, s.z_m);
+}
+
 double HostModel::viscous_power_W(double t_s, double v_m_s) const {
   if (has_infinite_mass()) return 0.0;
   const double rate = v_m_s - base_velocity_m_s(t_s);

@@ -15,9 +15,7 @@ Observation HostOnlyEngine::observe() const {
   Observation o;
   o.t_s = t_s_;
   o.host = trajectory_.at(t_s_);
-  o.energy.host_counts = !model_.has_infinite_mass();
-  o.energy.host_kinetic_J = 0.5 * model_.mass_kg() * o.host.v_m_s * o.host.v_m_s;
-  o.energy.spring_potential_J = model_.spring_energy_J(t_s_, o.host.z_m);
+  model_.write_energy_to(o.energy, t_s_, o.host);
   o.energy.dissipated_viscous_J = viscous_J_;
   o.energy.excitation_work_J = excitation_J_;
   return o;

@@ -11,10 +11,13 @@
 #include <set>
 #include <sstream>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/input_file.hpp"
 #include "pdamp/model/cell_grid.hpp"
+#include "pdamp/model/host.hpp"
 #include "pdamp/model/placement.hpp"
 
 namespace pdamp {
@@ -96,6 +99,49 @@ double parse_in_range(const Value& v, const Range& r) {
   return x;
 }
 
+/// A default value as `pdamp keys` prints it and a scenario file would write it.
+std::string text(double x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
+
+/// A bound on work: a power of ten as 1eN, as one writes it.
+std::string work_limit_text(std::int64_t n) {
+  int exponent = 0;
+  std::int64_t rest = n;
+  while (rest >= 10 && rest % 10 == 0) {
+    rest /= 10;
+    ++exponent;
+  }
+  return rest == 1 && exponent > 0 ? "1e" + std::to_string(exponent) : std::to_string(n);
+}
+
+/// The words a key of named choices accepts, in the order messages list them.
+template <class Choice>
+using Names = std::vector<std::pair<std::string, Choice>>;
+
+template <class Choice>
+Choice parse_choice(const Value& v, const Names<Choice>& names) {
+  const auto it = std::find_if(names.begin(), names.end(), [&](const auto& entry) { return entry.first == v.text; });
+  if (it != names.end()) return it->second;
+  std::string valid;
+  for (const auto& [name, choice] : names) valid += (valid.empty() ? "" : ", ") + name;
+  reject(v, "must be one of " + valid);
+}
+
+template <class Choice>
+std::string name_of(Choice choice, const Names<Choice>& names) {
+  return std::find_if(names.begin(), names.end(), [&](const auto& entry) { return entry.second == choice; })->first;
+}
+
+const Names<ExcitationMode> excitation_modes{{"free", ExcitationMode::free_decay},
+                                             {"base", ExcitationMode::base_motion},
+                                             {"force", ExcitationMode::force},
+                                             {"prescribed", ExcitationMode::prescribed_motion}};
+const Names<HardRestitution> restitutions{{"constant", HardRestitution::constant},
+                                          {"calibrated", HardRestitution::calibrated}};
+
 using Apply = std::function<void(Scenario&, const Value&)>;
 
 /// One scenario key: its name (section.key), default text, unit and meaning. A key
@@ -131,28 +177,13 @@ Apply number(double& (*field)(Scenario&), Range range) {
 
 #define PDAMP_FIELD(expr) [](Scenario& s) -> double& { return s.expr; }
 
-ExcitationMode parse_mode(const Value& v) {
-  static const std::map<std::string, ExcitationMode> modes{{"free", ExcitationMode::free_decay},
-                                                           {"base", ExcitationMode::base_motion},
-                                                           {"force", ExcitationMode::force},
-                                                           {"prescribed", ExcitationMode::prescribed_motion}};
-  const auto it = modes.find(v.text);
-  if (it == modes.end()) reject(v, "must be one of free, base, force, prescribed");
-  return it->second;
-}
-
 std::vector<KeySpec> soft_law_keys(const std::string& section, SoftContactLaw Scenario::*law,
                                    const std::string& inherit_section) {
   auto field = [law](double SoftContactLaw::*member, Range range) -> Apply {
     return [law, member, range](Scenario& s, const Value& v) { s.*law.*member = parse_in_range(v, range); };
   };
   auto inherit = [&](const std::string& key) { return inherit_section.empty() ? "" : inherit_section + "." + key; };
-  const SoftContactLaw d;
-  auto text = [](double x) {
-    std::ostringstream o;
-    o << x;
-    return o.str();
-  };
+  const SoftContactLaw d = Scenario{}.*law;
   const std::string who = inherit_section.empty() ? "sphere-sphere" : "sphere-wall";
   return {
       {section + ".kn_N_m1_5", text(d.kn_N_m1_5), "N/m^1.5", "Hertz normal stiffness k_n (" + who + ")",
@@ -169,54 +200,74 @@ std::vector<KeySpec> soft_law_keys(const std::string& section, SoftContactLaw Sc
 }
 
 std::vector<KeySpec> hard_law_keys(const std::string& section, HardContactLaw Scenario::*law,
-                                   const std::string& en_default, const std::string& inherit_section) {
+                                   const std::string& inherit_section) {
   auto field = [law](double HardContactLaw::*member, Range range) -> Apply {
     return [law, member, range](Scenario& s, const Value& v) { s.*law.*member = parse_in_range(v, range); };
   };
   auto inherit = [&](const std::string& key) { return inherit_section.empty() ? "" : inherit_section + "." + key; };
+  const HardContactLaw d = Scenario{}.*law;
   const std::string who = inherit_section.empty() ? "sphere-sphere" : "sphere-wall";
   return {
-      {section + ".en", en_default, "1", "normal restitution coefficient e_n (" + who + ")",
+      {section + ".en", text(d.en), "1", "normal restitution coefficient e_n (" + who + ")",
        field(&HardContactLaw::en, unit_interval), ""},
-      {section + ".mu", "0.55", "1", "Coulomb friction coefficient (" + who + ")",
+      {section + ".mu", text(d.mu), "1", "Coulomb friction coefficient (" + who + ")",
        field(&HardContactLaw::mu, non_negative), inherit("mu")},
-      {section + ".beta0", "0.35", "1", "tangential restitution of sticking collisions (" + who + ")",
+      {section + ".beta0", text(d.beta0), "1", "tangential restitution of sticking collisions (" + who + ")",
        field(&HardContactLaw::beta0, signed_unit_interval), inherit("beta0")},
   };
 }
 
+/// Gravity as `gravity.g_m_s2` takes it: the downward magnitude, or the vector.
+std::string gravity_text(const Eigen::Vector3d& g) {
+  if (g.x() == 0.0 && g.y() == 0.0 && g.z() <= 0.0) return text(-g.z());
+  return text(g.x()) + " " + text(g.y()) + " " + text(g.z());
+}
+
+/// The diameter as `particles.diameter_m` takes it: one, or 'dmin dmax'.
+std::string diameter_text(const ParticleSettings& p) {
+  return p.diameter_min_m == p.diameter_max_m ? text(p.diameter_min_m)
+                                              : text(p.diameter_min_m) + " " + text(p.diameter_max_m);
+}
+
+/// Every key; the defaults are those of a default-constructed `Scenario`.
 const std::vector<KeySpec>& key_specs() {
   static const std::vector<KeySpec> specs = [] {
+    const Scenario d;
     std::vector<KeySpec> k{
         {"scenario.name", "", "", "name stored with each run (default: the file name without extension)",
          [](Scenario& s, const Value& v) {
            if (!v.text.empty()) s.name = v.text;
          },
          ""},
-        {"host.mass_kg", "0.0376", "kg", "host mass M (for prescribed motion: the nominal mass used in psi)",
+        {"host.mass_kg", text(d.host.mass_kg), "kg",
+         "host mass M (for prescribed motion: the nominal mass used in psi)",
          number(PDAMP_FIELD(host.mass_kg), positive), ""},
-        {"host.stiffness_N_m", "470", "N/m", "host spring K", number(PDAMP_FIELD(host.stiffness_N_m), positive), ""},
-        {"host.damping_N_s_m", "0.1", "N s/m", "host viscous damper C",
+        {"host.stiffness_N_m", text(d.host.stiffness_N_m), "N/m", "host spring K",
+         number(PDAMP_FIELD(host.stiffness_N_m), positive), ""},
+        {"host.damping_N_s_m", text(d.host.damping_N_s_m), "N s/m", "host viscous damper C",
          number(PDAMP_FIELD(host.damping_N_s_m), non_negative), ""},
-        {"host.z0_m", "0.0157", "m", "initial host displacement from its static equilibrium",
+        {"host.z0_m", text(d.host.z0_m), "m", "initial host displacement from its static equilibrium",
          number(PDAMP_FIELD(host.z0_m), any_number), ""},
-        {"host.v0_m_s", "0", "m/s", "initial host velocity", number(PDAMP_FIELD(host.v0_m_s), any_number), ""},
-        {"excitation.mode", "free", "",
+        {"host.v0_m_s", text(d.host.v0_m_s), "m/s", "initial host velocity",
+         number(PDAMP_FIELD(host.v0_m_s), any_number), ""},
+        {"excitation.mode", name_of(d.excitation.mode, excitation_modes), "",
          "free (decay) | base (base motion y = A sin(wt+phi) through K and C) | force (F0 sin(wt+phi) on the "
          "host) | prescribed (host moves as z = A sin(wt+phi), infinite mass)",
-         [](Scenario& s, const Value& v) { s.excitation.mode = parse_mode(v); }, ""},
-        {"excitation.amplitude_m", "0", "m", "motion amplitude A (base and prescribed modes)",
-         number(PDAMP_FIELD(excitation.amplitude_m), non_negative), ""},
-        {"excitation.force_N", "0", "N", "force amplitude F0 (force mode)",
-         number(PDAMP_FIELD(excitation.force_N), non_negative), ""},
-        {"excitation.frequency_hz", "0", "Hz", "excitation frequency f (w = 2 pi f)",
-         number(PDAMP_FIELD(excitation.frequency_hz), non_negative), ""},
-        {"excitation.phase_rad", "0", "rad", "excitation phase phi",
-         number(PDAMP_FIELD(excitation.phase_rad), any_number), ""},
-        {"cavity.diameter_m", "0.0254", "m", "cylinder diameter D", number(PDAMP_FIELD(cavity.diameter_m), positive),
+         [](Scenario& s, const Value& v) { s.excitation.mode = parse_choice(v, excitation_modes); }, ""},
+        {"excitation.amplitude_m", text(d.excitation.amplitude_m), "m",
+         "motion amplitude A (base and prescribed modes)", number(PDAMP_FIELD(excitation.amplitude_m), non_negative),
          ""},
-        {"cavity.height_m", "0.00704", "m", "cylinder height H", number(PDAMP_FIELD(cavity.height_m), positive), ""},
-        {"gravity.g_m_s2", "9.81", "m/s^2",
+        {"excitation.force_N", text(d.excitation.force_N), "N", "force amplitude F0 (force mode)",
+         number(PDAMP_FIELD(excitation.force_N), non_negative), ""},
+        {"excitation.frequency_hz", text(d.excitation.frequency_hz), "Hz", "excitation frequency f (w = 2 pi f)",
+         number(PDAMP_FIELD(excitation.frequency_hz), non_negative), ""},
+        {"excitation.phase_rad", text(d.excitation.phase_rad), "rad", "excitation phase phi",
+         number(PDAMP_FIELD(excitation.phase_rad), any_number), ""},
+        {"cavity.diameter_m", text(d.cavity.diameter_m), "m", "cylinder diameter D",
+         number(PDAMP_FIELD(cavity.diameter_m), positive), ""},
+        {"cavity.height_m", text(d.cavity.height_m), "m", "cylinder height H",
+         number(PDAMP_FIELD(cavity.height_m), positive), ""},
+        {"gravity.g_m_s2", gravity_text(d.gravity_m_s2), "m/s^2",
          "one number: magnitude of gravity pointing down (-z), 0 for microgravity; three numbers: the vector",
          [](Scenario& s, const Value& v) {
            const auto words = split_words(v.text);
@@ -234,12 +285,13 @@ const std::vector<KeySpec>& key_specs() {
            }
          },
          ""},
-        {"particles.count", "1246", "", "number of spheres n (0 runs the host alone)",
+        {"particles.count", std::to_string(d.particles.count), "", "number of spheres n (0 runs the host alone)",
          [](Scenario& s, const Value& v) {
            s.particles.count = static_cast<int>(parse_whole(v, 0, max_particle_count));
          },
          ""},
-        {"particles.diameter_m", "0.00088", "m", "sphere diameter d, or 'dmin dmax' for diameters uniform in a range",
+        {"particles.diameter_m", diameter_text(d.particles), "m",
+         "sphere diameter d, or 'dmin dmax' for diameters uniform in a range",
          [](Scenario& s, const Value& v) {
            const auto words = split_words(v.text);
            if (words.empty() || words.size() > 2) reject(v, "expected one diameter or two ('dmin dmax')");
@@ -250,9 +302,10 @@ const std::vector<KeySpec>& key_specs() {
            s.particles.diameter_max_m = hi;
          },
          ""},
-        {"particles.density_kg_m3", "9000", "kg/m^3", "sphere material density",
+        {"particles.density_kg_m3", text(d.particles.density_kg_m3), "kg/m^3", "sphere material density",
          number(PDAMP_FIELD(particles.density_kg_m3), positive), ""},
-        {"particles.seed", "1", "", "random seed of the initial placement (unsigned 64-bit)",
+        {"particles.seed", std::to_string(d.particles.seed), "",
+         "random seed of the initial placement (unsigned 64-bit)",
          [](Scenario& s, const Value& v) {
            std::uint64_t seed = 0;
            const char* end = v.text.data() + v.text.size();
@@ -261,10 +314,12 @@ const std::vector<KeySpec>& key_specs() {
            s.particles.seed = seed;
          },
          ""},
-        {"run.duration_s", "1.5", "s", "simulated time", number(PDAMP_FIELD(run.duration_s), positive), ""},
-        {"run.sample_interval_s", "0.001", "s", "interval between stored samples",
+        {"run.duration_s", text(d.run.duration_s), "s", "simulated time", number(PDAMP_FIELD(run.duration_s), positive),
+         ""},
+        {"run.sample_interval_s", text(d.run.sample_interval_s), "s", "interval between stored samples",
          number(PDAMP_FIELD(run.sample_interval_s), positive), ""},
-        {"run.dt_s", "auto", "s", "soft engine time step, or 'auto' (from the Hertz contact time)",
+        {"run.dt_s", d.run.dt_s ? text(*d.run.dt_s) : "auto", "s",
+         "soft engine time step, or 'auto' (from the Hertz contact time)",
          [](Scenario& s, const Value& v) {
            constexpr Range time_step{0.0, inf, false, "must be 'auto' or a time step > 0 in seconds"};
            const auto words = split_words(v.text);
@@ -280,39 +335,33 @@ const std::vector<KeySpec>& key_specs() {
            s.run.dt_s = parse_in_range(v, time_step);
          },
          ""},
-        {"run.max_steps", "1e9", "",
+        {"run.max_steps", work_limit_text(d.run.max_steps), "",
          "the most steps a run may take: the soft engine's time steps (the run's, and settling's up to its 5 s "
          "limit) and the run loop's observations (either model); a scenario that needs more is refused",
          whole(&RunSettings::max_steps, max_work_limit), ""},
-        {"run.max_samples", "1e6", "", "the most samples a run may store; a scenario that needs more is refused",
+        {"run.max_samples", work_limit_text(d.run.max_samples), "",
+         "the most samples a run may store; a scenario that needs more is refused",
          whole(&RunSettings::max_samples, max_work_limit), ""},
-        {"run.max_events", "1e10", "", "the most events the hard engine may handle; a run that reaches it fails",
+        {"run.max_events", work_limit_text(d.run.max_events), "",
+         "the most events the hard engine may handle; a run that reaches it fails",
          whole(&RunSettings::max_events, max_work_limit), ""},
     };
     for (auto& spec : soft_law_keys("soft", &Scenario::soft_particle, "")) k.push_back(spec);
     for (auto& spec : soft_law_keys("soft_wall", &Scenario::soft_wall, "soft")) k.push_back(spec);
-    for (auto& spec : hard_law_keys("hard", &Scenario::hard_particle, "0.71", "")) k.push_back(spec);
-    k.push_back({"hard.restitution", "constant", "",
+    for (auto& spec : hard_law_keys("hard", &Scenario::hard_particle, "")) k.push_back(spec);
+    k.push_back({"hard.restitution", name_of(d.hard_restitution, restitutions), "",
                  "constant (en and beta0 as given) | calibrated (e_n(v) and beta0(v) of the soft law, from "
                  "isolated soft collisions at the impact speed)",
-                 [](Scenario& s, const Value& v) {
-                   if (v.text == "constant")
-                     s.hard_restitution = HardRestitution::constant;
-                   else if (v.text == "calibrated")
-                     s.hard_restitution = HardRestitution::calibrated;
-                   else
-                     reject(v, "must be constant or calibrated");
-                 },
-                 ""});
+                 [](Scenario& s, const Value& v) { s.hard_restitution = parse_choice(v, restitutions); }, ""});
     // The hard engine's resting-bed parameters (docs/hard-engine.md, "Resting beds and inelastic collapse").
-    k.push_back({"hard.rest_speed_m_s", "0.005", "m/s",
+    k.push_back({"hard.rest_speed_m_s", text(d.hard_resting.rest_speed_m_s), "m/s",
                  "a sphere leaving the floor, top cap or a resting sphere slower than this (relative to the host) "
                  "while the host's acceleration presses it there comes to rest and rides with the host",
                  number(PDAMP_FIELD(hard_resting.rest_speed_m_s), non_negative), ""});
-    k.push_back({"hard.elastic_speed_m_s", "0.0001", "m/s",
+    k.push_back({"hard.elastic_speed_m_s", text(d.hard_resting.elastic_speed_m_s), "m/s",
                  "collisions with a normal approach speed below this are elastic (stops inelastic collapse)",
                  number(PDAMP_FIELD(hard_resting.elastic_speed_m_s), non_negative), ""});
-    for (auto& spec : hard_law_keys("hard_wall", &Scenario::hard_wall, "0.80", "hard")) k.push_back(spec);
+    for (auto& spec : hard_law_keys("hard_wall", &Scenario::hard_wall, "hard")) k.push_back(spec);
     return k;
   }();
   return specs;
@@ -469,7 +518,7 @@ void check_excitation(const Scenario& s, const RawScenario& raw) {
       forbid(key, std::string(key) + in_mode + " (the host follows z = A sin(wt+phi) exactly)");
     }
   } else if (e.mode != ExcitationMode::free_decay && s.host.damping_N_s_m == 0.0) {
-    const double w0 = std::sqrt(s.host.stiffness_N_m / s.host.mass_kg);
+    const double w0 = HostModel(s).natural_angular_frequency_rad_s();
     if (std::abs(e.angular_frequency_rad_s() - w0) <= 1e-9 * w0) {
       reject(raw.given.at("excitation.frequency_hz"),
              "equals the natural frequency of an undamped host: the response grows without bound; "

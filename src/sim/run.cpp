@@ -9,13 +9,14 @@
 
 #include "pdamp/analysis/cycle_analyzer.hpp"
 #include "pdamp/errors.hpp"
+#include "pdamp/model/host.hpp"
 
 namespace pdamp {
 
 double observation_interval_s(const Scenario& scenario) {
   double fastest = scenario.excitation.angular_frequency_rad_s();
   if (!scenario.host_has_infinite_mass()) {
-    fastest = std::max(fastest, std::sqrt(scenario.host.stiffness_N_m / scenario.host.mass_kg));
+    fastest = std::max(fastest, HostModel(scenario).natural_angular_frequency_rad_s());
   }
   return std::min(scenario.run.sample_interval_s, 2.0 * std::numbers::pi / fastest / 256.0);
 }

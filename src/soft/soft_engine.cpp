@@ -167,7 +167,6 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
 
   host_ = host_model_.initial_state();
   if (options_.hold_host) host_.v_m_s = 0.0;
-  ledger_.host_counts = !host_model_.has_infinite_mass();
 
   refresh_neighbours();
   compute_forces(0.0);
@@ -813,8 +812,7 @@ Observation SoftEngine::observe() const {
   o.host = host_;
   o.energy = ledger_;
   particle_energies().write_to(o.energy);
-  o.energy.host_kinetic_J = 0.5 * host_model_.mass_kg() * host_.v_m_s * host_.v_m_s;
-  o.energy.spring_potential_J = host_model_.spring_energy_J(t_s_, host_.z_m);
+  host_model_.write_energy_to(o.energy, t_s_, host_);
   o.energy.contact_elastic_J = contact_elastic_J_;
   o.counters.steps = steps_;
   o.counters.contacts = contacts_;

@@ -9,6 +9,7 @@
 /// `HostTrajectory` is the exact closed-form motion between particle impulses, for the
 /// event-driven engine and for runs without particles.
 
+#include "pdamp/model/energy_ledger.hpp"
 #include "pdamp/scenario/scenario.hpp"
 
 namespace pdamp {
@@ -28,6 +29,8 @@ class HostModel {
   bool has_infinite_mass() const { return mode_ == ExcitationMode::prescribed_motion; }
   ExcitationMode mode() const { return mode_; }
   double angular_frequency_rad_s() const { return omega_; }
+  /// √(K/M): the undamped angular frequency of the host alone (rad/s).
+  double natural_angular_frequency_rad_s() const;
   /// A of the base or prescribed motion (m).
   double motion_amplitude_m() const { return amplitude_m_; }
   HostState initial_state() const;
@@ -45,6 +48,9 @@ class HostModel {
   double force_N(double t_s, const HostState& s) const;
   /// ½ K (z − y)²
   double spring_energy_J(double t_s, double z_m) const;
+  /// The host's share of a ledger at a state: ½ M z'², ½ K (z − y)², and whether they
+  /// count in the stored energy (not for a prescribed host).
+  void write_energy_to(EnergyLedger& ledger, double t_s, const HostState& s) const;
   /// C (z' − y')², the rate at which the damper turns energy into heat (W).
   double viscous_power_W(double t_s, double v_m_s) const;
   /// Power the excitation feeds into host, spring and damper (W): F z' for a force,

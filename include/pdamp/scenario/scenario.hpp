@@ -20,6 +20,7 @@ struct HostSettings {
   double damping_N_s_m = 0.1;
   double z0_m = 0.0157;  ///< initial displacement
   double v0_m_s = 0.0;   ///< initial velocity
+  bool operator==(const HostSettings&) const = default;
 };
 
 enum class ExcitationMode {
@@ -36,6 +37,7 @@ struct ExcitationSettings {
   double frequency_hz = 0.0;
   double phase_rad = 0.0;
   double angular_frequency_rad_s() const;
+  bool operator==(const ExcitationSettings&) const = default;
 };
 
 /// Vertical closed cylinder cut into the host: side wall, bottom cap at the host's z,
@@ -44,6 +46,7 @@ struct CavitySettings {
   double diameter_m = 0.0254;
   double height_m = 0.00704;
   double radius_m() const { return 0.5 * diameter_m; }
+  bool operator==(const CavitySettings&) const = default;
 };
 
 struct ParticleSettings {
@@ -52,6 +55,7 @@ struct ParticleSettings {
   double diameter_max_m = 0.00088;
   double density_kg_m3 = 9000.0;
   std::uint64_t seed = 1;
+  bool operator==(const ParticleSettings&) const = default;
 };
 
 /// Hertz normal law with a constant dashpot, incremental tangential spring with Coulomb cap:
@@ -62,16 +66,18 @@ struct SoftContactLaw {
   double ks_N_m = 3.3e5;
   double cs_N_s_m = 0.015;
   double mu = 0.55;
+  bool operator==(const SoftContactLaw&) const = default;
 };
 
 /// Walton's three-parameter impulse law: normal restitution, Coulomb friction and
 /// tangential restitution of sticking collisions.
 /// The defaults are the Table 1 soft law's restitution at a 0.5 m/s impact
-/// (0.71 sphere–sphere; the wall default is set in scenario_loader.cpp).
+/// (0.71 sphere–sphere; `Scenario::hard_wall` sets 0.80 sphere–wall).
 struct HardContactLaw {
   double en = 0.71;
   double mu = 0.55;
   double beta0 = 0.35;  ///< Walton's typical value for metal spheres
+  bool operator==(const HardContactLaw&) const = default;
 };
 
 /// How the hard-sphere engine ends bouncing sequences that would otherwise never stop
@@ -84,6 +90,7 @@ struct HardRestingSettings {
   /// Collisions whose normal approach speed is below this are elastic in the normal
   /// direction, which stops inelastic collapse (infinitely many collisions in finite time).
   double elastic_speed_m_s = 1e-4;
+  bool operator==(const HardRestingSettings&) const = default;
 };
 
 /// Where the hard-sphere engine takes e_n and β0 from.
@@ -104,8 +111,11 @@ struct RunSettings {
   std::int64_t max_steps = 1'000'000'000;
   std::int64_t max_samples = 1'000'000;      ///< stored samples
   std::int64_t max_events = 10'000'000'000;  ///< events of the hard engine, all kinds
+  bool operator==(const RunSettings&) const = default;
 };
 
+/// Its member initializers are the defaults of every key (`pdamp keys` prints them, and
+/// a scenario file that leaves a key out gets them): they are written nowhere else.
 struct Scenario {
   std::string name;  ///< the scenario file's stem unless set in the file
   HostSettings host;
@@ -116,7 +126,7 @@ struct Scenario {
   SoftContactLaw soft_particle;  ///< particle–particle
   SoftContactLaw soft_wall;      ///< particle–wall (defaults to the particle–particle law)
   HardContactLaw hard_particle;
-  HardContactLaw hard_wall;
+  HardContactLaw hard_wall{.en = 0.80};
   HardRestingSettings hard_resting;
   HardRestitution hard_restitution = HardRestitution::constant;
   RunSettings run;
@@ -126,6 +136,7 @@ struct Scenario {
   std::string canonical_text;
 
   bool host_has_infinite_mass() const { return excitation.mode == ExcitationMode::prescribed_motion; }
+  bool operator==(const Scenario&) const = default;
 };
 
 }  // namespace pdamp

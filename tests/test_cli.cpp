@@ -23,30 +23,14 @@
 #include "test_support.hpp"
 
 using namespace pdamp;
+using test::count_rows;
+using test::pdamp_cli;
 using test::Process;
+using test::Result;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-Result pdamp_cli(const std::vector<std::string>& args, const test::TempDir& dir,
-                 const std::string& executable = PDAMP_EXECUTABLE) {
-  Process p(executable, args, dir);
-  const int code = p.wait();
-  return {code, p.out(), p.err()};
-}
-
 std::string table1() { return test::scenario_file("table1").string(); }
-
-std::int64_t count_rows(const std::filesystem::path& db, const std::string& sql) {
-  sqlite::Database d(db);
-  sqlite::Statement q(d, sql);
-  q.step();
-  return q.column_int(0);
-}
 
 }  // namespace
 
@@ -752,4 +736,20 @@ TEST_CASE("SIGINT while the bed settles ends pdamp within a second") {
   REQUIRE(s);
   CHECK(s->status == "interrupted");
   CHECK(s->message == "stopped while settling the bed");
+}
+
+TEST_CASE("pdamp compare runs both models from one bed and stores their comparison") {
+  test::TempDir dir("cli-compare");
+  const auto db = dir / "runs.sqlite";
+  const Result r = pdamp_cli({"compare", "--scenario", test::scenario_file("small").string(), "--set",
+                              "particles.count=30", "--duration", "0.08", "--db", db.string()},
+                             dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("comparison 1: scenario 'small', soft run 1, hard run 2") == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs WHERE status = 'completed' AND initial_state_id = 1") == 2);
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM comparisons WHERE soft_run_id = 1 AND hard_run_id = 2 "
+                   "AND initial_state_id = 1 AND hard_restitution = 'constant'") == 1);
+  CHECK(count_rows(db, "SELECT count(*) FROM comparison_energy WHERE comparison_id = 1") == 4);  // 0.05 s and the end
 }

@@ -16,6 +16,7 @@
 #include <thread>
 #include <vector>
 
+#include "pdamp/store/sqlite.hpp"
 #include "test_support.hpp"
 
 extern char** environ;
@@ -38,21 +39,33 @@ class Argv {
   std::vector<char*> pointers_;
 };
 
+/// Whether a started process leads a process group of its own, which
+/// Process::signal_group() then reaches with all its children.
+enum class Group { inherited, own };
+
 /// An executable (pdamp unless named) started with arguments, its stdout and stderr
 /// captured in `<stem>.out` and `<stem>.err` of a directory.
 class Process {
  public:
-  Process(const std::vector<std::string>& args, const TempDir& dir, const std::string& stem = "pdamp")
-      : Process(PDAMP_EXECUTABLE, args, dir, stem) {}
+  Process(const std::vector<std::string>& args, const TempDir& dir, const std::string& stem = "pdamp",
+          Group group = Group::inherited)
+      : Process(PDAMP_EXECUTABLE, args, dir, stem, group) {}
   Process(const std::string& executable, const std::vector<std::string>& args, const TempDir& dir,
-          const std::string& stem = "pdamp")
+          const std::string& stem = "pdamp", Group group = Group::inherited)
       : out_(dir / (stem + ".out")), err_(dir / (stem + ".err")) {
     Argv argv(executable, args);
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     posix_spawn_file_actions_addopen(&actions, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&actions, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    REQUIRE(posix_spawn(&pid_, argv.program(), &actions, nullptr, argv.get(), environ) == 0);
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    if (group == Group::own) {
+      posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+      posix_spawnattr_setpgroup(&attributes, 0);
+    }
+    REQUIRE(posix_spawn(&pid_, argv.program(), &actions, &attributes, argv.get(), environ) == 0);
+    posix_spawnattr_destroy(&attributes);
     posix_spawn_file_actions_destroy(&actions);
   }
   /// Waits for the exit and returns the exit code (128 + signal if killed).
@@ -82,6 +95,7 @@ class Process {
   /// The largest resident set the process had (kB), once it has been waited for.
   long peak_memory_kB() const { return peak_memory_kB_; }
   void signal(int number) const { kill(pid_, number); }
+  void signal_group(int number) const { kill(-pid_, number); }
   std::string out() const { return slurp(out_); }
   std::string err() const { return slurp(err_); }
 
@@ -96,5 +110,26 @@ class Process {
   long peak_memory_kB_ = 0;
   std::filesystem::path out_, err_;
 };
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+/// Runs an executable (pdamp unless named) to its end.
+inline Result pdamp_cli(const std::vector<std::string>& args, const TempDir& dir,
+                        const std::string& executable = PDAMP_EXECUTABLE) {
+  Process p(executable, args, dir);
+  const int code = p.wait();
+  return {code, p.out(), p.err()};
+}
+
+/// The first column of the first row of a query on a store file.
+inline std::int64_t count_rows(const std::filesystem::path& db, const std::string& sql) {
+  sqlite::Database d(db);
+  sqlite::Statement q(d, sql);
+  q.step();
+  return q.column_int(0);
+}
 
 }  // namespace pdamp::test

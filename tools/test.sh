@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kind=${1:-ci}
-tools/setup.sh
+tools/setup.sh python3-matplotlib  # the study plot's test draws with it
 tools/build.sh "$kind"
 if [ "$kind" = sanitize ]; then
   export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1

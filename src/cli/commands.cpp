@@ -10,6 +10,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "options.hpp"
 #include "pdamp/compare/comparison.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/sim/engine_factory.hpp"
@@ -30,26 +31,6 @@ std::atomic<bool> stop_requested{false};
 extern "C" void request_stop(int signal_number) {
   stop_signal.store(signal_number);
   stop_requested.store(true);
-}
-
-/// SIGINT and SIGTERM end a run cleanly: it keeps what it computed and is marked
-/// interrupted. A second signal does the same (the run loop checks often).
-void install_stop_handlers() {
-  struct sigaction action {};
-  action.sa_handler = request_stop;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
-}
-
-std::string format_number(double value, int precision = 4) {
-  std::ostringstream out;
-  out << std::setprecision(precision) << value;
-  return out.str();
-}
-
-std::string format_optional(const std::optional<double>& value, int precision = 4) {
-  return value ? format_number(*value, precision) : "-";
 }
 
 void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
@@ -236,25 +217,25 @@ int compare_command(const ScenarioRequest& request, const std::filesystem::path&
       return exit_code(run);
     }
   }
-  ComparisonRecord comparison = compare_stored_runs(store, run_ids[0], run_ids[1]);
-  comparison.scenario_name = scenario.name;
-  comparison.initial_state_id = bed.source()().state_id;
-  comparison.hard_restitution = scenario.hard_restitution == HardRestitution::calibrated ? "calibrated" : "constant";
-  const std::int64_t id = store.save_comparison(comparison);
+  const auto [id, comparison] = store_comparison(store, scenario, bed.source()().state_id, run_ids[0], run_ids[1]);
   print_comparison(store, id, comparison, std::cout);
   return 0;
 }
 
 int stop_signal_received() { return stop_signal.load(); }
 
+const std::atomic<bool>* stop_flag() { return &stop_requested; }
+
+void install_stop_handlers() {
+  struct sigaction action {};
+  action.sa_handler = request_stop;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
 void set_thread_count(const std::string& text) {
-  int threads = 0;
-  const char* end = text.data() + text.size();
-  if (auto [ptr, ec] = std::from_chars(text.data(), end, threads);
-      ec != std::errc() || ptr != end || threads < 1 || threads > 1024) {
-    throw InputError("--threads '" + text + "': must be a whole number from 1 to 1024");
-  }
-  omp_set_num_threads(threads);
+  omp_set_num_threads(static_cast<int>(parse_whole_number(text, 1, 1024, "--threads")));
 }
 
 int list_runs_command(const std::filesystem::path& db) {

@@ -1,6 +1,7 @@
 #pragma once
 /// The CLI's commands, each returning the process exit code.
 
+#include <atomic>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -29,6 +30,11 @@ int compare_command(const ScenarioRequest& request, const std::filesystem::path&
 /// Sets the number of threads (--threads); throws InputError unless it is 1 to 1024.
 void set_thread_count(const std::string& text);
 
+/// SIGINT and SIGTERM end a run cleanly: it keeps what it computed and is marked
+/// interrupted. A second signal does the same (the run loop checks often).
+void install_stop_handlers();
+/// True once SIGINT or SIGTERM arrived (after install_stop_handlers).
+const std::atomic<bool>* stop_flag();
 /// The signal that asked a run to stop (0 if none).
 int stop_signal_received();
 

@@ -12,11 +12,13 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/sim/snapshots.hpp"
 #include "pdamp/soft/simd_path.hpp"
 #include "pdamp/version.hpp"
 #include "rom_command.hpp"
+#include "study_commands.hpp"
 
 namespace po = boost::program_options;
 using namespace pdamp;
@@ -41,6 +43,8 @@ constexpr const char* usage =
     "  keys    list every scenario key with its unit, default and meaning\n"
     "  rom     --table FILE [--mass M --stiffness K --force F0|--base Y --freq A:B:N] [--out FILE]\n"
     "          a characterised damper's table on any single-degree-of-freedom host (harmonic balance)\n"
+    "  study   run|resume|list|show|plot|run-point ...\n"
+    "          parameter studies: many points of a base scenario, run in parallel and resumable\n"
     "\n"
     "  pdamp <command> --help   options of a command\n"
     "  pdamp --version\n"
@@ -63,12 +67,6 @@ po::options_description duration_option() {
   return o;
 }
 
-po::options_description db_option() {
-  po::options_description o("store");
-  o.add_options()("db", po::value<std::string>()->default_value("pdamp.sqlite"), "SQLite run store file");
-  return o;
-}
-
 po::options_description snapshot_options() {
   po::options_description o("snapshots for ParaView (docs/snapshots.md)");
   o.add_options()("snapshots", po::value<std::string>()->value_name("EVERY_S"),
@@ -77,35 +75,6 @@ po::options_description snapshot_options() {
                              "folder of the snapshots, each run's in DIR/run-<id>/ (default: beside the store, "
                              "named after it: pdamp.snapshots for pdamp.sqlite)");
   return o;
-}
-
-struct CommandLine {
-  po::variables_map vm;
-  ScenarioOverrides overrides;  ///< --set and --duration, in the order given
-};
-
-CommandLine parse(const std::vector<std::string>& args, const po::options_description& options,
-                  const po::positional_options_description& positional = {}) {
-  CommandLine line;
-  try {
-    const po::parsed_options parsed = po::command_line_parser(args).options(options).positional(positional).run();
-    po::store(parsed, line.vm);
-    po::notify(line.vm);
-    for (const po::option& o : parsed.options) {
-      for (const std::string& value : o.value) {
-        if (o.string_key == "set") line.overrides.push_back(value);
-        if (o.string_key == "duration") line.overrides.push_back("run.duration_s=" + value);
-      }
-    }
-  } catch (const po::error& e) {
-    throw InputError(std::string(e.what()));
-  }
-  return line;
-}
-
-std::string required(const po::variables_map& vm, const std::string& name, const std::string& command) {
-  if (!vm.count(name)) throw InputError("pdamp " + command + ": --" + name + " is required");
-  return vm[name].as<std::string>();
 }
 
 /// --snapshots and --snapshot-dir, if given (checked against the scenario by plan_run).
@@ -119,8 +88,16 @@ std::optional<SnapshotSettings> snapshot_request(const po::variables_map& vm) {
                                  default_snapshot_directory(vm["db"].as<std::string>()));
 }
 
+/// The scenario file with --set and --duration, in the order given (the last of a key wins).
 ScenarioRequest scenario_request(const CommandLine& line, const std::string& command) {
-  return {required(line.vm, "scenario", command), line.overrides};
+  ScenarioRequest request{required_option(line.vm, "scenario", command), {}};
+  for (const po::option& o : line.in_order) {
+    for (const std::string& value : o.value) {
+      if (o.string_key == "set") request.overrides.push_back(value);
+      if (o.string_key == "duration") request.overrides.push_back("run.duration_s=" + value);
+    }
+  }
+  return request;
 }
 
 int dispatch(const std::string& command, const std::vector<std::string>& args) {
@@ -136,7 +113,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
         "simd", po::value<std::string>(),
         "the soft engine's instruction set, sse2, avx2 or avx512 (default: the widest this CPU runs); results are the "
         "same bits on each");
-    const CommandLine line = parse(args, options);
+    const CommandLine line = parse_options(args, options);
     const po::variables_map& vm = line.vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
@@ -147,14 +124,14 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
     if (vm.count("simd"))
       soft::set_default_simd_path(soft::parse_simd_path(vm["simd"].as<std::string>(), "--simd"), "--simd");
-    return run_command(request, required(vm, "model", command), vm["db"].as<std::string>(), snapshot_request(vm),
+    return run_command(request, required_option(vm, "model", command), vm["db"].as<std::string>(), snapshot_request(vm),
                        isatty(STDERR_FILENO) != 0);
   }
   if (command == "compare") {
     po::options_description options("pdamp compare --scenario FILE [options]");
     options.add(help).add(scenario_options()).add(duration_option()).add(db_option()).add(snapshot_options());
     options.add_options()("threads", po::value<std::string>(), "threads for the soft engine (default: one per core)");
-    const CommandLine line = parse(args, options);
+    const CommandLine line = parse_options(args, options);
     const po::variables_map& vm = line.vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
@@ -167,7 +144,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   if (command == "runs") {
     po::options_description options("pdamp runs [--db FILE]");
     options.add(help).add(db_option());
-    const po::variables_map vm = parse(args, options).vm;
+    const po::variables_map vm = parse_options(args, options).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
@@ -180,12 +157,12 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     options.add_options()("run-id", po::value<std::string>(), "run to show");
     po::positional_options_description positional;
     positional.add("run-id", 1);
-    const po::variables_map vm = parse(args, options, positional).vm;
+    const po::variables_map vm = parse_options(args, options, positional).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
     }
-    return show_run_command(required(vm, "run-id", command), vm["db"].as<std::string>());
+    return show_run_command(required_option(vm, "run-id", command), vm["db"].as<std::string>());
   }
   if (command == "delete") {
     po::options_description options("pdamp delete RUN_ID... [--db FILE] [--force]");
@@ -194,7 +171,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
         "force", "also delete runs marked running (killed runs stay so; a run still going then fails)");
     po::positional_options_description positional;
     positional.add("run-id", -1);
-    const po::variables_map vm = parse(args, options, positional).vm;
+    const po::variables_map vm = parse_options(args, options, positional).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
@@ -206,7 +183,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   if (command == "check") {
     po::options_description options("pdamp check --scenario FILE [--set k=v ...]");
     options.add(help).add(scenario_options());
-    const CommandLine line = parse(args, options);
+    const CommandLine line = parse_options(args, options);
     if (line.vm.count("help")) {
       std::cout << options << "\n";
       return 0;
@@ -214,6 +191,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     return check_command(scenario_request(line, command));
   }
   if (command == "rom") return rom_command(args);
+  if (command == "study") return study_command(args);
   if (command == "keys") {
     describe_scenario_keys(std::cout);
     return 0;

@@ -60,16 +60,27 @@ std::string Progress::status(double t_s, std::string_view detail, std::chrono::s
 void Progress::update(double t_s, std::string_view detail) {
   const auto now = clock_();
   if (!origin_) origin_.emplace(now, t_s);
+  if (due(now)) draw(status(t_s, detail, now));
+}
+
+void Progress::show(std::string_view status) {
+  if (due(clock_())) draw(status);
+}
+
+bool Progress::due(std::chrono::steady_clock::time_point now) {
   const std::chrono::steady_clock::duration interval =
       terminal_ ? std::chrono::steady_clock::duration(redraw_interval) : log_interval;
-  if (now - last_shown_ < interval) return;
+  if (now - last_shown_ < interval) return false;
   last_shown_ = now;
-  const std::string text = status(t_s, detail, now);
+  return true;
+}
+
+void Progress::draw(std::string_view status) {
   if (terminal_) {
-    line_ = "  " + text;
+    line_ = "  " + std::string(status);
     out_ << '\r' << line_ << erase_to_end << std::flush;
   } else {
-    out_ << "pdamp: " << text << '\n' << std::flush;
+    out_ << "pdamp: " << status << '\n' << std::flush;
   }
 }
 

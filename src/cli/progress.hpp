@@ -30,6 +30,9 @@ class Progress {
   void begin(std::string phase, std::optional<double> total_s = std::nullopt);
   /// The phase has reached simulated time `t_s`; `detail` follows it on the line.
   void update(double t_s, std::string_view detail = {});
+  /// Shows `status` as the progress line, as update() would its own (for progress that is
+  /// not simulated time, such as a study's points).
+  void show(std::string_view status);
   /// A line of its own, e.g. "pdamp: warning: ...".
   void message(std::string_view line);
   /// Ends the phase: its last progress line stays, and what follows starts on a new line.
@@ -37,6 +40,10 @@ class Progress {
 
  private:
   std::string status(double t_s, std::string_view detail, std::chrono::steady_clock::time_point now) const;
+  /// Whether a line is due at `now` (a redraw interval on a terminal, a log interval
+  /// otherwise, since the last); if so, counts it as shown.
+  bool due(std::chrono::steady_clock::time_point now);
+  void draw(std::string_view status);
   void clear_line();
 
   std::ostream& out_;

@@ -1,6 +1,8 @@
 #include "text_table.hpp"
 
 #include <algorithm>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 namespace pdamp {
@@ -48,6 +50,16 @@ std::string cut(const std::string& text, std::size_t width) {
 }
 
 }  // namespace
+
+std::string format_number(double value, int precision) {
+  std::ostringstream out;
+  out << std::setprecision(precision) << value;
+  return out.str();
+}
+
+std::string format_optional(const std::optional<double>& value, int precision) {
+  return value ? format_number(*value, precision) : "-";
+}
 
 std::string printable(std::string_view text) {
   std::string out;

@@ -3,6 +3,7 @@
 /// fit what they hold.
 
 #include <cstddef>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <string_view>
@@ -17,6 +18,10 @@ std::string printable(std::string_view text);
 
 /// Characters (UTF-8 code points) of printable text.
 std::size_t display_width(std::string_view text);
+
+/// `value` with `precision` significant digits; "-" for none.
+std::string format_number(double value, int precision = 4);
+std::string format_optional(const std::optional<double>& value, int precision = 4);
 
 /// Columns separated by two spaces, each as wide as its widest cell (header included) up
 /// to its limit; a longer cell is cut to the limit, ending in "…". Cells are made

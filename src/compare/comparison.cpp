@@ -174,4 +174,15 @@ ComparisonRecord compare_stored_runs(RunStore& store, std::int64_t soft_run_id, 
   return r;
 }
 
+std::pair<std::int64_t, ComparisonRecord> store_comparison(RunStore& store, const Scenario& scenario,
+                                                           std::optional<std::int64_t> bed_state_id,
+                                                           std::int64_t soft_run_id, std::int64_t hard_run_id) {
+  ComparisonRecord comparison = compare_stored_runs(store, soft_run_id, hard_run_id);
+  comparison.scenario_name = scenario.name;
+  comparison.initial_state_id = bed_state_id;
+  comparison.hard_restitution = scenario.hard_restitution == HardRestitution::calibrated ? "calibrated" : "constant";
+  const std::int64_t id = store.save_comparison(comparison);
+  return {id, std::move(comparison)};
+}
+
 }  // namespace pdamp

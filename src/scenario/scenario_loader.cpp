@@ -19,6 +19,7 @@
 #include "pdamp/model/cell_grid.hpp"
 #include "pdamp/model/host.hpp"
 #include "pdamp/model/placement.hpp"
+#include "pdamp/scenario/ini.hpp"
 
 namespace pdamp {
 
@@ -33,21 +34,7 @@ struct Value {
   std::string origin;  ///< "file.ini, line 3", "--set host.z0_m" or "default"
 };
 
-/// Text for a message, with every byte outside printable ASCII written \xNN: nothing in
-/// it is invisible (a byte-order mark, a zero-width space, a control character).
-std::string printable(std::string_view text) {
-  std::string out;
-  for (const char c : text) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (byte >= 0x20 && byte < 0x7f) {
-      out += c;
-    } else {
-      constexpr const char* hex = "0123456789abcdef";
-      out += {'\\', 'x', hex[byte >> 4], hex[byte & 15]};
-    }
-  }
-  return out;
-}
+using ini::printable;
 
 [[noreturn]] void reject(const Value& v, const std::string& why) {
   throw InputError(v.origin + ": " + v.key + " = '" + printable(v.text) + "': " + why);
@@ -385,87 +372,38 @@ void require_known_key(const std::string& key, const std::string& where) {
   }
 }
 
-/// White space around keys and values, and before a comment (a line ends at '\n').
-bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
-std::string_view trim(std::string_view text) {
-  while (!text.empty() && is_blank(text.front())) text.remove_prefix(1);
-  while (!text.empty() && is_blank(text.back())) text.remove_suffix(1);
-  return text;
-}
-
-const std::string no_hash_in_values =
-    "a value cannot contain '#': in scenario syntax '#' starts a comment, and the scenario the store keeps must "
-    "read back the same";
-
-/// A line without its comment. A '#' starts a comment at the start of a line or after a
-/// space or tab; anywhere else it is refused, never silently cut.
-std::string_view strip_comment(std::string_view line, const std::string& where) {
-  const auto hash = line.find('#');
-  if (hash == std::string_view::npos) return line;
-  if (hash > 0 && !is_blank(line[hash - 1])) {
-    throw InputError(where + ": '" + printable(line) + "': '#' directly after text; " + no_hash_in_values +
-                     " (a comment starts with '#' after a space)");
-  }
-  return line.substr(0, hash);
-}
-
-/// Scenario-file syntax: `[section]` headers, `key = value` lines (the key is
-/// section.key under a header, or written in full before any), `#` comments, blank lines.
-/// A UTF-8 byte-order mark at the start is skipped. Keys the file repeats are refused.
+/// Scenario-file syntax (ini.hpp): a key is section.key under a header, or written in
+/// full before any. Keys the file repeats are refused.
 void parse_file_text(RawScenario& raw, std::string_view text, const std::string& origin) {
-  constexpr std::string_view byte_order_mark = "\xEF\xBB\xBF";
-  if (text.starts_with(byte_order_mark)) text.remove_prefix(byte_order_mark.size());
-  if (const auto nul = text.find('\0'); nul != std::string_view::npos) {
-    throw InputError(origin + ": a NUL byte at offset " + std::to_string(nul) + ": a scenario file is text");
-  }
-  std::string section;
   std::set<std::string> seen;
-  int number = 0;
-  for (std::size_t start = 0; start < text.size();) {
-    const std::size_t end = std::min(text.find('\n', start), text.size());
-    std::string_view line = text.substr(start, end - start);
-    start = end + 1;
-    ++number;
-    const std::string where = origin + ", line " + std::to_string(number);
-    line = trim(strip_comment(line, where));
-    if (line.empty()) continue;
-    if (line.front() == '[' && line.back() == ']') {
-      section = std::string(trim(line.substr(1, line.size() - 2)));
-      continue;
-    }
-    const auto eq = line.find('=');
-    if (eq == std::string_view::npos) {
-      throw InputError(where + ": '" + printable(line) +
-                       "' is not a 'key = value' line, a [section] header or a '#' comment");
-    }
-    const std::string name(trim(line.substr(0, eq)));
-    const std::string key = section.empty() ? name : section + "." + name;
-    require_known_key(key, where);
-    if (!seen.insert(key).second) throw InputError(where + ": key '" + key + "' is given more than once");
-    // The command line's overrides are parsed first and win over the file.
-    raw.given.try_emplace(key, Value{key, std::string(trim(line.substr(eq + 1))), where});
+  for (const ini::Entry& entry : ini::parse(text, origin).entries) {
+    const std::string key = entry.section.empty() ? entry.key : entry.section + "." + entry.key;
+    require_known_key(key, entry.where);
+    if (!seen.insert(key).second) throw InputError(entry.where + ": key '" + key + "' is given more than once");
+    // The overrides are parsed first and win over the file.
+    raw.given.try_emplace(key, Value{key, entry.value, entry.where});
   }
 }
 
-/// `--set section.key=value`, each one line; a key set again replaces the earlier value
-/// (the last on the command line wins).
-void parse_overrides(RawScenario& raw, const ScenarioOverrides& overrides) {
+/// `--set section.key=value` (or the values a study sets, named by `origin`), each one
+/// line; a key set again replaces the earlier value (the last on the command line wins).
+void parse_overrides(RawScenario& raw, const ScenarioOverrides& overrides, const std::string& origin) {
   for (const auto& item : overrides) {
-    const std::string where = "--set '" + printable(item) + "'";
+    const std::string where = origin + " '" + printable(item) + "'";
     if (item.find_first_of(std::string_view("\n\r\0", 3)) != std::string::npos) {
-      throw InputError(where + ": a --set is one section.key=value, without line breaks; give each key its own --set");
+      throw InputError(where + ": a " + origin +
+                       " is one section.key=value, without line breaks; give each key its own " + origin);
     }
     const auto eq = item.find('=');
     const auto dot = item.find('.');
     if (eq == std::string::npos || dot == std::string::npos || dot > eq) {
-      throw InputError(where + ": expected section.key=value, e.g. --set host.z0_m=0.01");
+      throw InputError(where + ": expected section.key=value, e.g. " + origin + " host.z0_m=0.01");
     }
-    const std::string key(trim(std::string_view(item).substr(0, eq)));
-    require_known_key(key, "--set " + printable(key));
-    const std::string value(trim(std::string_view(item).substr(eq + 1)));
-    if (value.find('#') != std::string::npos) throw InputError(where + ": " + no_hash_in_values);
-    raw.given.insert_or_assign(key, Value{key, value, "--set " + key});
+    const std::string key(ini::trim(std::string_view(item).substr(0, eq)));
+    require_known_key(key, origin + " " + printable(key));
+    const std::string value(ini::trim(std::string_view(item).substr(eq + 1)));
+    if (value.find('#') != std::string::npos) throw InputError(where + ": " + ini::no_hash_in_values);
+    raw.given.insert_or_assign(key, Value{key, value, origin + " " + key});
   }
 }
 
@@ -617,9 +555,9 @@ Scenario build(const RawScenario& raw, const std::string& default_name) {
 }  // namespace
 
 Scenario parse_scenario(const std::string& text, const std::string& name, const std::string& origin,
-                        const ScenarioOverrides& overrides) {
+                        const ScenarioOverrides& overrides, const std::string& overrides_origin) {
   RawScenario raw;
-  parse_overrides(raw, overrides);
+  parse_overrides(raw, overrides, overrides_origin);
   parse_file_text(raw, text, origin);
   return build(raw, name);
 }
@@ -628,6 +566,12 @@ Scenario load_scenario(const std::filesystem::path& file, const ScenarioOverride
   const std::string text = read_input_file({file, "scenario file '" + printable(file.string()) + "'", "a scenario file",
                                             max_scenario_file_bytes, "; the paper's cases are in data/scenarios/"});
   return parse_scenario(text, file.stem().string(), file.string(), overrides);
+}
+
+std::vector<std::string> scenario_key_names() {
+  std::vector<std::string> names;
+  for (const auto& spec : key_specs()) names.push_back(spec.key);
+  return names;
 }
 
 void describe_scenario_keys(std::ostream& out) {

@@ -65,12 +65,14 @@ RunPlan plan_run(Model model, const Scenario& scenario, const std::optional<Snap
 }
 
 StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& bed, const RunControl& control,
-                        const std::function<void(const std::string&)>& warn) {
+                        const std::function<void(const std::string&)>& warn,
+                        const std::function<void(std::int64_t run_id)>& started) {
   const Scenario& scenario = *plan.scenario;
   const auto wall_start = std::chrono::steady_clock::now();
   StoredRun result;
   result.run_id = store.begin_run({std::string(to_string(plan.model)), scenario.name, scenario.canonical_text,
                                    scenario.particles.seed, scenario.particles.count, scenario.run.duration_s});
+  if (started) started(result.run_id);
   std::unique_ptr<Engine> engine;
   std::optional<SnapshotWriter> snapshots;
   try {

@@ -274,9 +274,116 @@ CREATE TABLE run_snapshots (
 ) STRICT;
 )sql";
 
-constexpr std::array<std::string_view, 7> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
+/// Studies: a study's definition, its points with their parameters,
+/// status and lease, the runs of each point's attempts, and each completed point's
+/// metrics. Frequency-response points (a later migration) join these tables: a curve of
+/// ordered points, and their response metrics in a table of their own.
+constexpr std::string_view v8_studies = R"sql(
+CREATE TABLE studies (
+  study_id       INTEGER PRIMARY KEY AUTOINCREMENT,
+  name           TEXT NOT NULL UNIQUE,
+  models         TEXT NOT NULL CHECK (models IN ('soft', 'hard', 'both')),
+  n_points       INTEGER NOT NULL CHECK (n_points > 0),
+  study_file     TEXT NOT NULL,  -- where the study file was read (absolute path)
+  study_text     TEXT NOT NULL,  -- its text
+  scenario_file  TEXT NOT NULL,  -- the base scenario file (absolute path)
+  scenario_text  TEXT NOT NULL,  -- its text; the points are built from these two texts
+  pdamp_version  TEXT NOT NULL,
+  created_at     TEXT NOT NULL   -- ISO 8601, UTC
+) STRICT;
+
+CREATE TABLE study_points (
+  study_id       INTEGER NOT NULL REFERENCES studies (study_id) ON DELETE CASCADE,
+  point          INTEGER NOT NULL CHECK (point >= 1),  -- 1, 2, ... in the study file's order
+  section        TEXT NOT NULL,                        -- the section it comes from: 'sweep' or 'sweep.NAME'
+  status         TEXT NOT NULL DEFAULT 'pending'
+                 CHECK (status IN ('pending', 'running', 'completed', 'failed', 'interrupted')),
+  attempt        INTEGER NOT NULL DEFAULT 0,           -- times started; the latest attempt's runs count
+  message        TEXT NOT NULL DEFAULT '',
+  lease_host     TEXT,                                 -- while running: the host,
+  lease_pid      INTEGER,                              -- process id
+  lease_start    INTEGER,                              -- and start time (clock ticks after boot) of its process
+  started_at     TEXT,
+  ended_at       TEXT,
+  comparison_id  INTEGER REFERENCES comparisons (comparison_id) ON DELETE SET NULL,  -- models = both
+  PRIMARY KEY (study_id, point)
+) STRICT;
+
+CREATE TABLE study_point_values (
+  study_id  INTEGER NOT NULL,
+  point     INTEGER NOT NULL,
+  key       TEXT NOT NULL,  -- scenario key, section.key
+  value     TEXT NOT NULL,  -- as a scenario file would give it
+  number    REAL,           -- the value if it is one number, else NULL
+  PRIMARY KEY (study_id, point, key),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+
+CREATE TABLE study_point_runs (
+  study_id  INTEGER NOT NULL,
+  point     INTEGER NOT NULL,
+  attempt   INTEGER NOT NULL,
+  model     TEXT NOT NULL CHECK (model IN ('soft', 'hard')),
+  run_id    INTEGER NOT NULL UNIQUE REFERENCES runs (run_id) ON DELETE CASCADE,
+  PRIMARY KEY (study_id, point, attempt, model),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+
+CREATE TABLE study_point_metrics (
+  study_id                INTEGER NOT NULL,
+  point                   INTEGER NOT NULL,
+  model                   TEXT NOT NULL CHECK (model IN ('soft', 'hard')),
+  run_id                  INTEGER NOT NULL UNIQUE REFERENCES runs (run_id) ON DELETE CASCADE,
+  dissipated_impact_J     REAL NOT NULL,  -- at the run's last sample
+  dissipated_friction_J   REAL NOT NULL,
+  dissipated_viscous_J    REAL NOT NULL,
+  psi_peak                REAL,           -- the largest psi of a cycle; NULL without cycles
+  psi_peak_gamma          REAL,           -- Gamma of that cycle
+  final_amplitude_m       REAL,           -- amplitude of the last complete cycle
+  cycles                  INTEGER NOT NULL,
+  energy_balance_rel_err  REAL NOT NULL,  -- max over the run
+  wall_time_s             REAL NOT NULL,
+  PRIMARY KEY (study_id, point, model),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+
+-- A completed point one of whose runs is deleted (pdamp delete) is pending again, without
+-- metrics: resuming the study runs it again.
+CREATE TRIGGER study_point_run_deleted AFTER DELETE ON study_point_runs
+BEGIN
+  UPDATE study_points SET status = 'pending', comparison_id = NULL, ended_at = NULL,
+         message = 'its ' || OLD.model || ' run ' || OLD.run_id || ' was deleted'
+   WHERE study_id = OLD.study_id AND point = OLD.point AND attempt = OLD.attempt AND status = 'completed';
+  DELETE FROM study_point_metrics WHERE study_id = OLD.study_id AND point = OLD.point
+     AND (SELECT status FROM study_points WHERE study_id = OLD.study_id AND point = OLD.point) = 'pending';
+END;
+
+CREATE VIEW study_summary AS
+SELECT s.study_id, s.name, s.models, s.n_points,
+       sum(p.status = 'completed') AS completed, sum(p.status = 'failed') AS failed,
+       sum(p.status = 'interrupted') AS interrupted, sum(p.status = 'running') AS running,
+       sum(p.status = 'pending') AS pending, s.created_at, s.study_file
+FROM studies s JOIN study_points p ON p.study_id = s.study_id
+GROUP BY s.study_id;
+
+CREATE VIEW study_results AS
+SELECT p.study_id, s.name AS study, p.point, p.section, p.status, m.model, m.run_id,
+       m.dissipated_impact_J, m.dissipated_friction_J, m.dissipated_viscous_J,
+       m.dissipated_impact_J + m.dissipated_friction_J + m.dissipated_viscous_J AS dissipated_total_J,
+       m.psi_peak, m.psi_peak_gamma, m.final_amplitude_m, m.cycles, m.energy_balance_rel_err, m.wall_time_s
+FROM study_points p JOIN studies s ON s.study_id = p.study_id
+LEFT JOIN study_point_metrics m ON m.study_id = p.study_id AND m.point = p.point;
+
+CREATE VIEW study_agreement AS
+SELECT p.study_id, p.point, c.comparison_id, c.soft_run_id, c.hard_run_id, c.envelope_max_rel_diff,
+       c.envelope_rms_rel_diff, c.psi_mean_abs_diff, c.dissipated_rel_diff, c.small_amplitude_freq_soft_hz,
+       c.small_amplitude_freq_hard_hz, c.wall_time_ratio
+FROM study_points p JOIN comparisons c ON c.comparison_id = p.comparison_id;
+)sql";
+
+constexpr std::array<std::string_view, 8> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
                                               v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused,
-                                              v7_run_snapshots};
+                                              v7_run_snapshots,       v8_studies};
 
 }  // namespace
 

@@ -4,8 +4,11 @@
 /// two runs.
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <utility>
 
+#include "pdamp/scenario/scenario.hpp"
 #include "pdamp/store/run_store.hpp"
 
 namespace pdamp {
@@ -15,5 +18,12 @@ namespace pdamp {
 inline constexpr double comparison_times_s[] = {0.05, 0.1, 0.2, 0.5, 1.0};
 
 ComparisonRecord compare_stored_runs(RunStore& store, std::int64_t soft_run_id, std::int64_t hard_run_id);
+
+/// Compares the soft and the hard run of `scenario` from the bed `bed_state_id` and stores
+/// the comparison (`pdamp compare`, a study point of both models); returns its id and what
+/// was stored.
+std::pair<std::int64_t, ComparisonRecord> store_comparison(RunStore& store, const Scenario& scenario,
+                                                           std::optional<std::int64_t> bed_state_id,
+                                                           std::int64_t soft_run_id, std::int64_t hard_run_id);
 
 }  // namespace pdamp

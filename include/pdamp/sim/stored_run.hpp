@@ -46,9 +46,11 @@ struct StoredRun {
 /// Stores the run's row, gets its bed, runs it (writing its snapshots, recorded in the
 /// store) and stores how it ended: failed with the message if the bed, the engine, the
 /// snapshots or the run failed, interrupted if a signal stopped it.
-/// `warn` receives the engine's warnings (they are also appended to the run's message).
+/// `warn` receives the engine's warnings (they are also appended to the run's message);
+/// `started` hears of the run's row as soon as it exists (a study links it to its point).
 /// Throws only if the store itself fails.
 StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& bed, const RunControl& control,
-                        const std::function<void(const std::string&)>& warn = {});
+                        const std::function<void(const std::string&)>& warn = {},
+                        const std::function<void(std::int64_t run_id)>& started = {});
 
 }  // namespace pdamp

@@ -183,7 +183,9 @@ class RunStore {
   std::optional<CycleOverview> cycle_overview(std::int64_t run_id);
 
   /// Deletes runs and every row that refers to them (samples, cycles, statistics,
-  /// calibrations, comparisons, where their snapshots are), all or none: throws InputError, deleting nothing, for an
+  /// calibrations, comparisons, where their snapshots are, their links to study points: a
+  /// completed point that loses a run is pending again), all or none: throws InputError,
+  /// deleting nothing, for an
   /// id not in the store, or for a `running` run unless `including_running`. Returns the
   /// deleted runs. Settled beds stay (other runs may start from them), and so do snapshot files.
   std::vector<DeletedRun> delete_runs(std::span<const std::int64_t> run_ids, bool including_running);

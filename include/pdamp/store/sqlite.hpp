@@ -62,6 +62,8 @@ class Database {
   /// Runs one or more statements without results.
   void exec(std::string_view sql);
   std::int64_t last_insert_rowid() const;
+  /// Rows changed by the last INSERT, UPDATE or DELETE.
+  std::int64_t changes() const;
   sqlite3* handle() const { return db_; }
   const std::filesystem::path& file() const { return file_; }
   std::chrono::milliseconds busy_limit() const { return busy_limit_; }

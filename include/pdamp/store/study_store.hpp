@@ -1,0 +1,111 @@
+#pragma once
+/// Studies in the run store (tables `studies`, `study_points`, `study_point_values`,
+/// `study_point_runs`, `study_point_metrics`). A point is claimed by the
+/// process that runs it (its lease), linked to the runs it makes, and completed with its
+/// metrics in one transaction, so a point is either completed with all its metrics or it
+/// is run again.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "pdamp/store/run_store.hpp"
+
+namespace pdamp {
+
+enum class PointStatus { pending, running, completed, failed, interrupted };
+std::string_view to_string(PointStatus status);
+PointStatus parse_point_status(std::string_view text);
+
+/// The process that runs a point: its host, id and start time (which tells a live process
+/// from a later one that reuses the id).
+struct ProcessLease {
+  std::string host;
+  std::int64_t pid = 0;
+  std::int64_t start_ticks = 0;
+};
+
+struct NewStudy {
+  std::string name, models, study_file, study_text, scenario_file, scenario_text;
+};
+
+struct NewStudyPoint {
+  int point = 0;
+  std::string section;
+  std::vector<std::pair<std::string, std::string>> values;  ///< (scenario key, value text)
+};
+
+struct StudyRecord {
+  std::int64_t study_id = 0;
+  std::string name, models, study_file, study_text, scenario_file, scenario_text, pdamp_version, created_at;
+  int n_points = 0;
+};
+
+/// One row of the `study_summary` view.
+struct StudySummary {
+  std::int64_t study_id = 0;
+  std::string name, models, created_at;
+  int n_points = 0, completed = 0, failed = 0, interrupted = 0, running = 0, pending = 0;
+};
+
+struct StudyPointState {
+  int point = 0;
+  std::string section;
+  PointStatus status = PointStatus::pending;
+  int attempt = 0;
+  std::string message;
+  std::optional<ProcessLease> lease;  ///< while running
+};
+
+/// A completed point's metrics for one model (a row of `study_point_metrics`), with the
+/// agreement of the two models where the study runs both.
+struct PointMetrics {
+  int point = 0;
+  std::string model;
+  std::int64_t run_id = 0;
+  double dissipated_impact_J = 0.0, dissipated_friction_J = 0.0, dissipated_viscous_J = 0.0;
+  std::optional<double> psi_peak, psi_peak_gamma, final_amplitude_m;
+  std::int64_t cycles = 0;
+  double energy_balance_rel_err = 0.0, wall_time_s = 0.0;
+  std::optional<double> dissipated_rel_diff, envelope_max_rel_diff;  ///< models = both
+};
+
+class StudyStore {
+ public:
+  explicit StudyStore(RunStore& store) : store_(&store) {}
+
+  /// Stores a study and its points (pending), all or nothing; returns its id.
+  std::int64_t create_study(const NewStudy& study, const std::vector<NewStudyPoint>& points);
+  std::optional<StudyRecord> find_study(std::string_view name);
+  std::optional<StudyRecord> study(std::int64_t study_id);
+  std::vector<StudySummary> list_studies();
+  std::optional<StudySummary> summary(std::int64_t study_id);
+  std::vector<StudyPointState> points(std::int64_t study_id);
+  std::optional<StudyPointState> point(std::int64_t study_id, int point);
+  std::vector<PointMetrics> metrics(std::int64_t study_id);
+
+  /// Marks a pending, failed or interrupted point running under `lease` and starts its
+  /// next attempt; returns the attempt, or nothing if the point is completed or running.
+  std::optional<int> claim_point(std::int64_t study_id, int point, const ProcessLease& lease);
+  void link_run(std::int64_t study_id, int point, int attempt, std::string_view model, std::int64_t run_id);
+  /// Completes the point's attempt: each run's metrics, computed from its stored samples
+  /// and cycles, and the comparison of the two models if there is one.
+  void complete_point(std::int64_t study_id, int point, int attempt, const std::vector<std::int64_t>& run_ids,
+                      std::optional<std::int64_t> comparison_id);
+  /// Ends the point's attempt as failed or interrupted with a message.
+  void end_point(std::int64_t study_id, int point, int attempt, PointStatus status, const std::string& message);
+  /// A point still running under `lease`, whose process is gone, ends as `status` (failed
+  /// or interrupted) with a message, and so do its attempt's runs that were left running.
+  /// False if the point has moved on.
+  bool abandon_point(std::int64_t study_id, int point, const ProcessLease& lease, PointStatus status,
+                     const std::string& message);
+
+ private:
+  sqlite::Database& db() { return store_->database(); }
+  RunStore* store_;
+};
+
+}  // namespace pdamp

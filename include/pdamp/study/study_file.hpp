@@ -1,0 +1,65 @@
+#pragma once
+/// Study files: the scenario files' INI syntax, read by the same parser (scenario/ini.hpp),
+/// with
+///   [study]         name (default: the file name), scenario (the base scenario file,
+///                   relative to the study file), models = soft | hard | both;
+///   [sweep]         scenario keys, each with a list of values or a range; the keys form a
+///   [sweep.NAME]    grid (the first key varies slowest); `zip = KEY KEY ...` varies the
+///                   listed keys together instead. Several sweep sections add their points.
+/// A value list separates values with commas, so that a value may hold spaces
+/// (`particles.diameter_m = 0.0008 0.0012, 0.001`); `start:stop:count` is a linear range and
+/// `start:stop:count:log` a geometric one. Parsing checks the file's own structure and its
+/// keys; every point's scenario is checked when the study is built (study.hpp).
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pdamp::study {
+
+enum class StudyModels {
+  soft,  ///< the soft model alone
+  hard,  ///< the hard model alone
+  both,  ///< both from one settled bed, with their comparison (as `pdamp compare`)
+};
+std::string_view to_string(StudyModels models);
+
+/// One axis of a sweep's grid: one key with its values, or several zipped keys that take
+/// their i-th values together.
+struct SweepAxis {
+  std::vector<std::string> keys;
+  std::vector<std::vector<std::string>> values;  ///< values[i][k]: the i-th value of keys[k]
+  std::size_t size() const { return values.size(); }
+};
+
+/// A `[sweep]` or `[sweep.NAME]` section: the grid of its axes.
+struct Sweep {
+  std::string section;  ///< "sweep" or "sweep.NAME"
+  std::vector<SweepAxis> axes;
+  /// The number of points, or `limit + 1` if there are more than `limit`.
+  std::size_t points_up_to(std::size_t limit) const;
+};
+
+/// What a study file says (its base scenario is read by study.hpp).
+struct StudyFile {
+  std::string name;
+  std::string scenario;  ///< the base scenario file as written, relative to the study file
+  StudyModels models = StudyModels::soft;
+  std::vector<Sweep> sweeps;
+};
+
+/// Parses a study file's text. `origin` names it in messages; `default_name` is the study's
+/// name unless [study] gives one. Throws InputError naming the line and what is valid.
+StudyFile parse_study_file(const std::string& text, const std::string& origin, const std::string& default_name);
+
+/// The values of one sweep key: a comma-separated list of values and ranges (see above).
+/// A range's first and last values are its start and stop as written, the others are
+/// printed with 15 significant digits. Throws InputError naming `what`.
+std::vector<std::string> parse_sweep_values(const std::string& text, const std::string& what);
+
+/// Longest range and most points a study may have even with --force: beyond them the
+/// study would take memory and validation time without bound.
+inline constexpr long max_range_count = 10'000;
+
+}  // namespace pdamp::study

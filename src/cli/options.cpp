@@ -1,0 +1,47 @@
+#include "options.hpp"
+
+#include <charconv>
+
+#include "pdamp/errors.hpp"
+
+namespace po = boost::program_options;
+
+namespace pdamp {
+
+po::options_description db_option() {
+  po::options_description o("store");
+  o.add_options()("db", po::value<std::string>()->default_value("pdamp.sqlite"), "SQLite run store file");
+  return o;
+}
+
+CommandLine parse_options(const std::vector<std::string>& args, const po::options_description& options,
+                          const po::positional_options_description& positional) {
+  CommandLine line;
+  try {
+    const po::parsed_options parsed = po::command_line_parser(args).options(options).positional(positional).run();
+    po::store(parsed, line.vm);
+    po::notify(line.vm);
+    line.in_order = parsed.options;
+  } catch (const po::error& e) {
+    throw InputError(std::string(e.what()));
+  }
+  return line;
+}
+
+std::string required_option(const po::variables_map& vm, const std::string& name, const std::string& command) {
+  if (!vm.count(name)) throw InputError("pdamp " + command + ": --" + name + " is required");
+  return vm[name].as<std::string>();
+}
+
+long parse_whole_number(const std::string& text, long min, long max, const std::string& what) {
+  long value = 0;
+  const char* end = text.data() + text.size();
+  if (auto [ptr, ec] = std::from_chars(text.data(), end, value);
+      ec != std::errc() || ptr != end || value < min || value > max) {
+    throw InputError(what + " '" + text + "': must be a whole number from " + std::to_string(min) + " to " +
+                     std::to_string(max));
+  }
+  return value;
+}
+
+}  // namespace pdamp

@@ -1,0 +1,31 @@
+#pragma once
+/// Command-line parsing shared by the CLI's commands (Boost.Program_options).
+
+#include <boost/program_options.hpp>
+#include <string>
+#include <vector>
+
+namespace pdamp {
+
+/// --db FILE, default ./pdamp.sqlite.
+boost::program_options::options_description db_option();
+
+/// A command's parsed arguments: the options by name, and each as given, in order.
+struct CommandLine {
+  boost::program_options::variables_map vm;
+  std::vector<boost::program_options::option> in_order;
+};
+
+/// Parses `args`; a bad option is an InputError.
+CommandLine parse_options(const std::vector<std::string>& args,
+                          const boost::program_options::options_description& options,
+                          const boost::program_options::positional_options_description& positional = {});
+
+/// The option's value; InputError naming the command if it is missing.
+std::string required_option(const boost::program_options::variables_map& vm, const std::string& name,
+                            const std::string& command);
+
+/// A whole number from `min` to `max` given for `what`; InputError otherwise.
+long parse_whole_number(const std::string& text, long min, long max, const std::string& what);
+
+}  // namespace pdamp

@@ -1,0 +1,371 @@
+#include "study_commands.hpp"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <csignal>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+#include "commands.hpp"
+#include "options.hpp"
+#include "pdamp/errors.hpp"
+#include "pdamp/store/study_store.hpp"
+#include "pdamp/study/lease.hpp"
+#include "pdamp/study/point_runner.hpp"
+#include "pdamp/study/study_runner.hpp"
+#include "study_progress.hpp"
+#include "text_table.hpp"
+
+namespace po = boost::program_options;
+
+namespace pdamp {
+namespace {
+
+using namespace study;
+
+constexpr const char* study_usage =
+    "usage: pdamp study <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  run STUDY.ini [--jobs N] [--threads N] [--force] [--db FILE]\n"
+    "          validate every point, store the study, run its points N at a time; running an\n"
+    "          unchanged study again resumes it (completed points are kept)\n"
+    "  resume STUDY_ID [--jobs N] [--threads N] [--db FILE]\n"
+    "          run the points of a stored study that are not completed\n"
+    "  list [--db FILE]                  the stored studies\n"
+    "  show STUDY_ID [--db FILE]         every point of a study: values, status, metrics\n"
+    "  plot STUDY_ID [--metric M] [--x KEY] [--out FILE.png] [--db FILE]\n"
+    "          draw a metric against a swept key, one curve per model (python3-matplotlib)\n"
+    "  run-point STUDY_ID POINT [--threads N] [--db FILE]\n"
+    "          run one point of a stored study in this process (what each worker runs)\n"
+    "\n"
+    "A study file names a base scenario, the model(s) and [sweep] sections of scenario keys and\n"
+    "their values; data/studies/table4.ini is an example.\n";
+
+/// A study subcommand's command line: its own options, --help, --db, and positional
+/// arguments in order.
+class Subcommand {
+ public:
+  Subcommand(const std::string& usage, const std::vector<std::string>& positional) : options_(usage) {
+    options_.add_options()("help,h", "show this help");
+    for (const auto& name : positional) {
+      arguments_.add_options()(name.c_str(), po::value<std::string>());
+      positional_.add(name.c_str(), 1);
+    }
+    options_.add(db_option());
+  }
+  po::options_description_easy_init add_options() { return options_.add_options(); }
+  /// Parses the arguments; false (with the help printed) for --help.
+  bool parse(const std::vector<std::string>& args) {
+    po::options_description all;
+    all.add(options_).add(arguments_);
+    vm_ = parse_options(args, all, positional_).vm;
+    if (!vm_.count("help")) return true;
+    std::cout << options_ << "\n";
+    return false;
+  }
+  const po::variables_map& vm() const { return vm_; }
+
+ private:
+  po::options_description options_;    ///< shown by --help
+  po::options_description arguments_;  ///< the positional arguments, named in the usage line
+  po::positional_options_description positional_;
+  po::variables_map vm_;
+};
+
+/// The study named by STUDY_ID in the --db store, as stored.
+struct OpenStudy {
+  OpenStudy(const po::variables_map& vm, const std::string& command, StoreAccess access)
+      : id(parse_whole_number(required_option(vm, "STUDY_ID", command), 1, std::numeric_limits<std::int64_t>::max(),
+                              "STUDY_ID (see 'pdamp study list')")),
+        store(vm["db"].as<std::string>(), access),
+        studies(store),
+        study(stored_study(record())) {}
+
+  std::int64_t id;
+  RunStore store;
+  StudyStore studies;
+  Study study;
+
+ private:
+  StudyRecord record() {
+    auto found = studies.study(id);
+    if (!found) {
+      throw InputError("study " + std::to_string(id) + " is not in '" + store.database().file().string() +
+                       "' (see 'pdamp study list')");
+    }
+    return *found;
+  }
+};
+
+void print_study(StudyStore& studies, std::int64_t id, const Study& study, std::ostream& out) {
+  const auto summary = studies.summary(id);
+  out << "study " << id << " '" << printable(study.file.name) << "': models " << to_string(study.file.models) << ", "
+      << summary->n_points << " points (" << summary->completed << " completed, " << summary->failed << " failed, "
+      << summary->interrupted << " interrupted, " << summary->running << " running, " << summary->pending
+      << " pending)\n  study file     " << printable(study.source.study_path.string()) << "\n  base scenario  "
+      << printable(study.source.scenario_path.string()) << "\n";
+  std::map<int, std::vector<PointMetrics>> metrics;
+  for (auto& m : studies.metrics(id)) metrics[m.point].push_back(std::move(m));
+  TextTable table({{"point", true},
+                   {"section"},
+                   {"status"},
+                   {"model"},
+                   {"run", true},
+                   {"psi_peak", true},
+                   {"at_Gamma", true},
+                   {"dissipated_J", true},
+                   {"final_A_m", true},
+                   {"balance", true},
+                   {"wall_s", true},
+                   {"hard/soft", true},
+                   {"values"}});
+  std::vector<std::string> messages;
+  for (const auto& p : studies.points(id)) {
+    const StudyPoint& point = study.points.at(static_cast<std::size_t>(p.point - 1));
+    const std::vector<std::string> head{std::to_string(p.point), point.section, std::string(to_string(p.status))};
+    if (p.status != PointStatus::completed) {
+      auto row = head;
+      row.resize(12, "-");
+      row.push_back(describe_values(point));
+      table.add_row(row);
+      if (!p.message.empty()) messages.push_back("point " + std::to_string(p.point) + ": " + p.message);
+      if (p.lease && !lease_is_alive(*p.lease)) {
+        messages.push_back("point " + std::to_string(p.point) + ": its process (" + std::to_string(p.lease->pid) +
+                           " on " + p.lease->host + ") is gone; 'pdamp study resume " + std::to_string(id) +
+                           "' runs it again");
+      }
+      continue;
+    }
+    for (const auto& m : metrics[p.point]) {
+      // models = both: the hard model's dissipated energy over the soft model's.
+      const std::optional<double> ratio =
+          m.model == "hard" && m.dissipated_rel_diff ? std::optional(1.0 + *m.dissipated_rel_diff) : std::nullopt;
+      auto row = head;
+      row.insert(row.end(), {m.model, std::to_string(m.run_id), format_optional(m.psi_peak, 3),
+                             format_optional(m.psi_peak_gamma, 3),
+                             format_number(m.dissipated_impact_J + m.dissipated_friction_J + m.dissipated_viscous_J),
+                             format_optional(m.final_amplitude_m, 3), format_number(m.energy_balance_rel_err, 2),
+                             format_number(m.wall_time_s, 3), format_optional(ratio, 3), describe_values(point)});
+      table.add_row(row);
+    }
+  }
+  table.print(out);
+  for (const auto& message : messages) out << printable(message) << "\n";
+}
+
+/// Soft-engine threads per worker: the cores (or OMP_NUM_THREADS) shared among the jobs.
+int threads_per_worker(const po::variables_map& vm, int jobs) {
+  if (vm.count("threads")) {
+    return static_cast<int>(parse_whole_number(vm["threads"].as<std::string>(), 1, 1024, "--threads"));
+  }
+  return std::max(1, omp_get_max_threads() / jobs);
+}
+
+/// The options of the commands that run a study's points.
+void add_run_options(Subcommand& command) {
+  command.add_options()("jobs,j", po::value<std::string>()->default_value("1"),
+                        "points run at once, each in its own process")(
+      "threads", po::value<std::string>(),
+      "soft-engine threads per point (default: the cores shared among the jobs); results are the same bits for any "
+      "number");
+}
+
+/// The runner's options from the command line, checked before the store is touched.
+StudyRunOptions runner_options(const po::variables_map& vm) {
+  StudyRunOptions options;
+  options.jobs = static_cast<int>(parse_whole_number(vm["jobs"].as<std::string>(), 1, 256, "--jobs"));
+  options.threads_per_worker = threads_per_worker(vm, options.jobs);
+  options.db = vm["db"].as<std::string>();
+  options.worker = {"/proc/self/exe", {"study", "run-point"}};
+  options.stop = stop_flag();
+  return options;
+}
+
+/// The runner's events shown as the study's progress.
+StudyEvents events_to(StudyProgress& progress) {
+  return {
+      [&progress](int point) { progress.started(point); },
+      [&progress](int point, double fraction, std::string_view phase) { progress.progressed(point, fraction, phase); },
+      [&progress](int point, bool completed) { progress.ended(point, completed); },
+      [&progress](const std::string& line) { progress.message(line); },
+      [&progress](int queued) { progress.update(queued); }};
+}
+
+int run_and_report(RunStore& store, std::int64_t id, const Study& study, StudyRunOptions options) {
+  install_stop_handlers();
+  StudyStore studies(store);
+  const int completed = studies.summary(id)->completed, points = static_cast<int>(study.points.size());
+  std::cerr << "pdamp: study " << id << " '" << printable(study.file.name) << "': " << points << " points, "
+            << completed << " completed before"
+            << (completed == points ? "; nothing to run" : "; up to " + std::to_string(options.jobs) + " at a time")
+            << "\n";
+  StudyProgress progress(std::cerr, isatty(STDERR_FILENO) != 0, printable(study.file.name), points, completed,
+                         options.jobs);
+  options.events = events_to(progress);
+  const StudyRunReport report = run_study(store, id, options);
+  progress.finish();
+  print_study(studies, id, study, std::cout);
+  for (const auto& problem : report.problems) std::cerr << "pdamp: " << printable(problem) << "\n";
+  if (report.stopped) {
+    std::cerr << "pdamp: stopped; 'pdamp study resume " << id << "' runs the "
+              << report.not_started + report.interrupted << " points left\n";
+    return 128 + stop_signal_received();
+  }
+  return report.completed == points ? 0 : 1;
+}
+
+int study_run(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study run STUDY.ini [options]", {"STUDY.ini"});
+  add_run_options(command);
+  const std::string force_help = "run a study of more than " + std::to_string(max_points_without_force) + " points";
+  command.add_options()("force", force_help.c_str());
+  if (!command.parse(args)) return 0;
+  const auto& vm = command.vm();
+  // Everything that can be wrong with the study is found before the store is touched.
+  const StudyRunOptions runner = runner_options(vm);
+  Study study = make_study(read_study_source(required_option(vm, "STUDY.ini", "study run")), vm.count("force") > 0);
+  validate_study(study);
+  RunStore store(vm["db"].as<std::string>());
+  const std::int64_t id = find_or_create_study(store, study);
+  return run_and_report(store, id, study, runner);
+}
+
+int study_resume(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study resume STUDY_ID [options]", {"STUDY_ID"});
+  add_run_options(command);
+  if (!command.parse(args)) return 0;
+  const StudyRunOptions runner = runner_options(command.vm());
+  OpenStudy open(command.vm(), "study resume", StoreAccess::modify);
+  // The files as they are now must still describe the stored study.
+  const auto& source = open.study.source;
+  if (std::filesystem::exists(source.study_path) && std::filesystem::exists(source.scenario_path)) {
+    find_or_create_study(open.store, make_study(read_study_source(source.study_path), true));
+  } else {
+    std::cerr << "pdamp: the study's files are gone; resuming from the definition stored with it\n";
+  }
+  return run_and_report(open.store, open.id, open.study, runner);
+}
+
+int study_run_point(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study run-point STUDY_ID POINT [options]", {"STUDY_ID", "POINT"});
+  command.add_options()("threads", po::value<std::string>(), "soft-engine threads")(
+      "report-progress", "progress lines on stdout for the study runner");
+  if (!command.parse(args)) return 0;
+  const auto& vm = command.vm();
+  const auto point =
+      static_cast<int>(parse_whole_number(required_option(vm, "POINT", "study run-point"), 1, 1'000'000, "POINT"));
+  if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
+  OpenStudy open(vm, "study run-point", StoreAccess::modify);
+
+  install_stop_handlers();
+  PointRunControl control;
+  control.stop = stop_flag();
+  control.warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
+  if (vm.count("report-progress")) {
+    std::signal(SIGPIPE, SIG_IGN);  // a runner that is gone must not kill the point before it is stored
+    control.progress = [](double fraction, std::string_view phase) {
+      std::fputs(progress_line(fraction, phase).c_str(), stdout);
+      std::fflush(stdout);
+    };
+  }
+  const PointResult result = run_study_point(open.store, open.id, open.study, point, control);
+  switch (result.status) {
+    case PointStatus::completed:
+      if (!vm.count("report-progress")) std::cout << "study " << open.id << " point " << point << ": completed\n";
+      return 0;
+    case PointStatus::pending:
+      std::cerr << "pdamp: " << result.message << "; not run here\n";
+      return exit_point_not_claimed;
+    case PointStatus::interrupted:
+      std::cerr << "pdamp: point " << point << " interrupted: " << result.message << "\n";
+      return 128 + stop_signal_received();
+    default:
+      std::cerr << "pdamp: point " << point << " failed: " << result.message << "\n";
+      return 1;
+  }
+}
+
+int study_list(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study list [--db FILE]", {});
+  if (!command.parse(args)) return 0;
+  RunStore store(command.vm()["db"].as<std::string>(), StoreAccess::read);
+  TextTable table({{"study", true},
+                   {"name", false, 40},
+                   {"models"},
+                   {"points", true},
+                   {"completed", true},
+                   {"failed", true},
+                   {"interrupted", true},
+                   {"running", true},
+                   {"pending", true},
+                   {"created"}});
+  for (const auto& s : StudyStore(store).list_studies()) {
+    table.add_row({std::to_string(s.study_id), s.name, s.models, std::to_string(s.n_points),
+                   std::to_string(s.completed), std::to_string(s.failed), std::to_string(s.interrupted),
+                   std::to_string(s.running), std::to_string(s.pending), s.created_at});
+  }
+  table.print(std::cout);
+  return 0;
+}
+
+int study_show(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study show STUDY_ID [--db FILE]", {"STUDY_ID"});
+  if (!command.parse(args)) return 0;
+  OpenStudy open(command.vm(), "study show", StoreAccess::read);
+  print_study(open.studies, open.id, open.study, std::cout);
+  return 0;
+}
+
+int study_plot(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study plot STUDY_ID [options]", {"STUDY_ID"});
+  command.add_options()("metric", po::value<std::string>()->default_value("psi_peak"),
+                        "a column of the study_results view: psi_peak, psi_peak_gamma, dissipated_total_J, "
+                        "dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J, final_amplitude_m, cycles, "
+                        "energy_balance_rel_err, wall_time_s")(
+      "x", po::value<std::string>(), "the swept key on the x axis (default: the one with the most values)")(
+      "out", po::value<std::string>(), "the picture (default: study-ID.png)");
+  if (!command.parse(args)) return 0;
+  const auto& vm = command.vm();
+  const std::int64_t id = OpenStudy(vm, "study plot", StoreAccess::read).id;
+  const std::string db = vm["db"].as<std::string>();
+  const std::filesystem::path script = std::filesystem::path(PDAMP_TOOLS_DIR) / "plot_study.py";
+  if (!std::filesystem::exists(script)) {
+    throw RuntimeFailure("the plotting script '" + script.string() + "' is missing (it comes with pdamp's sources)");
+  }
+  std::vector<std::string> python{"/usr/bin/python3", script.string(),    "--db",     db,
+                                  "--study",          std::to_string(id), "--metric", vm["metric"].as<std::string>()};
+  if (vm.count("x")) python.insert(python.end(), {"--x", vm["x"].as<std::string>()});
+  if (vm.count("out")) python.insert(python.end(), {"--out", vm["out"].as<std::string>()});
+  std::vector<char*> argv;
+  for (auto& a : python) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  execv(argv[0], argv.data());
+  throw RuntimeFailure(
+      "cannot run /usr/bin/python3 for the plot; install Debian's python3-matplotlib "
+      "(tools/setup.sh python3-matplotlib)");
+}
+
+}  // namespace
+
+int study_command(const std::vector<std::string>& args) {
+  if (args.empty() || args[0] == "--help" || args[0] == "-h") {
+    std::cout << study_usage;
+    return args.empty() ? 2 : 0;
+  }
+  const std::vector<std::string> rest(args.begin() + 1, args.end());
+  if (args[0] == "run") return study_run(rest);
+  if (args[0] == "resume") return study_resume(rest);
+  if (args[0] == "run-point") return study_run_point(rest);
+  if (args[0] == "list") return study_list(rest);
+  if (args[0] == "show") return study_show(rest);
+  if (args[0] == "plot") return study_plot(rest);
+  throw InputError("unknown study command '" + args[0] + "'\n\n" + study_usage);
+}
+
+}  // namespace pdamp

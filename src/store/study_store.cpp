@@ -1,0 +1,301 @@
+#include "pdamp/store/study_store.hpp"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <sstream>
+#include <utility>
+
+#include "pdamp/errors.hpp"
+#include "pdamp/version.hpp"
+
+namespace pdamp {
+namespace {
+
+/// The time as run_store.cpp writes it: ISO 8601, UTC, milliseconds.
+constexpr std::string_view now_sql = "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')";
+
+std::string with_now(std::string_view before, std::string_view after) {
+  return std::string(before) + std::string(now_sql) + std::string(after);
+}
+
+/// The value as a number if it is exactly one finite number.
+std::optional<double> single_number(const std::string& value) {
+  std::istringstream in(value);
+  std::string word, extra;
+  if (!(in >> word) || (in >> extra)) return std::nullopt;
+  double x = 0.0;
+  const char* end = word.data() + word.size();
+  if (auto [ptr, ec] = std::from_chars(word.data(), end, x); ec != std::errc() || ptr != end || !std::isfinite(x)) {
+    return std::nullopt;
+  }
+  return x;
+}
+
+constexpr std::string_view study_columns =
+    "SELECT study_id, name, models, study_file, study_text, scenario_file, scenario_text, pdamp_version, "
+    "created_at, n_points FROM studies";
+
+StudyRecord read_study(const sqlite::Statement& q) {
+  return {q.column_int(0),  q.column_text(1), q.column_text(2), q.column_text(3), q.column_text(4),
+          q.column_text(5), q.column_text(6), q.column_text(7), q.column_text(8), static_cast<int>(q.column_int(9))};
+}
+
+constexpr std::string_view summary_columns =
+    "SELECT study_id, name, models, created_at, n_points, completed, failed, interrupted, running, pending "
+    "FROM study_summary";
+
+StudySummary read_summary(const sqlite::Statement& q) {
+  StudySummary s;
+  s.study_id = q.column_int(0);
+  s.name = q.column_text(1);
+  s.models = q.column_text(2);
+  s.created_at = q.column_text(3);
+  int* counts[] = {&s.n_points, &s.completed, &s.failed, &s.interrupted, &s.running, &s.pending};
+  for (int c = 0; c < 6; ++c) *counts[c] = static_cast<int>(q.column_int(4 + c));
+  return s;
+}
+
+constexpr std::string_view point_columns =
+    "SELECT point, section, status, attempt, message, lease_host, lease_pid, lease_start FROM study_points";
+
+StudyPointState read_point(const sqlite::Statement& q) {
+  StudyPointState p{static_cast<int>(q.column_int(0)), q.column_text(1), parse_point_status(q.column_text(2)),
+                    static_cast<int>(q.column_int(3)), q.column_text(4), std::nullopt};
+  if (!q.is_null(6)) p.lease = ProcessLease{q.column_text(5), q.column_int(6), q.column_int(7)};
+  return p;
+}
+
+/// The first row of a query with one parameter, read by `read`.
+template <typename Key, typename Read>
+auto first_row(sqlite::Database& db, const std::string& sql, Key key, Read read)
+    -> std::optional<decltype(read(std::declval<const sqlite::Statement&>()))> {
+  sqlite::Statement q(db, sql);
+  q.bind(1, key);
+  if (!q.step()) return std::nullopt;
+  return read(q);
+}
+
+}  // namespace
+
+namespace {
+
+constexpr std::array<std::pair<PointStatus, std::string_view>, 5> point_statuses{
+    {{PointStatus::pending, "pending"},
+     {PointStatus::running, "running"},
+     {PointStatus::completed, "completed"},
+     {PointStatus::failed, "failed"},
+     {PointStatus::interrupted, "interrupted"}}};
+
+}  // namespace
+
+std::string_view to_string(PointStatus status) {
+  for (const auto& [value, name] : point_statuses) {
+    if (value == status) return name;
+  }
+  throw RuntimeFailure("a study point status out of range");
+}
+
+PointStatus parse_point_status(std::string_view text) {
+  for (const auto& [value, name] : point_statuses) {
+    if (name == text) return value;
+  }
+  throw RuntimeFailure("unknown study point status '" + std::string(text) + "' in the store");
+}
+
+std::int64_t StudyStore::create_study(const NewStudy& s, const std::vector<NewStudyPoint>& points) {
+  return sqlite::write_transaction(db(), [&] {
+    sqlite::Statement insert(db(), with_now("INSERT INTO studies (name, models, n_points, study_file, study_text, "
+                                            "scenario_file, scenario_text, pdamp_version, created_at) "
+                                            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ",
+                                            ")"));
+    insert.bind(1, s.name)
+        .bind(2, s.models)
+        .bind(3, static_cast<std::int64_t>(points.size()))
+        .bind(4, s.study_file)
+        .bind(5, s.study_text)
+        .bind(6, s.scenario_file)
+        .bind(7, s.scenario_text)
+        .bind(8, std::string_view(version_string));
+    insert.run();
+    const std::int64_t id = db().last_insert_rowid();
+    sqlite::Statement point(db(), "INSERT INTO study_points (study_id, point, section) VALUES (?, ?, ?)");
+    sqlite::Statement value(
+        db(), "INSERT INTO study_point_values (study_id, point, key, value, number) VALUES (?, ?, ?, ?, ?)");
+    for (const auto& p : points) {
+      point.bind(1, id).bind(2, p.point).bind(3, p.section).run();
+      for (const auto& [key, text] : p.values) {
+        value.bind(1, id).bind(2, p.point).bind(3, key).bind(4, text).bind(5, single_number(text)).run();
+      }
+    }
+    return id;
+  });
+}
+
+std::optional<StudyRecord> StudyStore::find_study(std::string_view name) {
+  return first_row(db(), std::string(study_columns) + " WHERE name = ?", name, read_study);
+}
+
+std::optional<StudyRecord> StudyStore::study(std::int64_t study_id) {
+  return first_row(db(), std::string(study_columns) + " WHERE study_id = ?", study_id, read_study);
+}
+
+std::vector<StudySummary> StudyStore::list_studies() {
+  sqlite::Statement q(db(), std::string(summary_columns) + " ORDER BY study_id");
+  std::vector<StudySummary> studies;
+  while (q.step()) studies.push_back(read_summary(q));
+  return studies;
+}
+
+std::optional<StudySummary> StudyStore::summary(std::int64_t study_id) {
+  return first_row(db(), std::string(summary_columns) + " WHERE study_id = ?", study_id, read_summary);
+}
+
+std::vector<StudyPointState> StudyStore::points(std::int64_t study_id) {
+  sqlite::Statement q(db(), std::string(point_columns) + " WHERE study_id = ? ORDER BY point");
+  q.bind(1, study_id);
+  std::vector<StudyPointState> points;
+  while (q.step()) points.push_back(read_point(q));
+  return points;
+}
+
+std::optional<StudyPointState> StudyStore::point(std::int64_t study_id, int point) {
+  sqlite::Statement q(db(), std::string(point_columns) + " WHERE study_id = ? AND point = ?");
+  q.bind(1, study_id).bind(2, point);
+  if (!q.step()) return std::nullopt;
+  return read_point(q);
+}
+
+std::vector<PointMetrics> StudyStore::metrics(std::int64_t study_id) {
+  sqlite::Statement q(db(),
+                      "SELECT m.point, m.model, m.run_id, m.dissipated_impact_J, m.dissipated_friction_J, "
+                      "m.dissipated_viscous_J, m.psi_peak, m.psi_peak_gamma, m.final_amplitude_m, m.cycles, "
+                      "m.energy_balance_rel_err, m.wall_time_s, a.dissipated_rel_diff, a.envelope_max_rel_diff "
+                      "FROM study_point_metrics m LEFT JOIN study_agreement a "
+                      "ON a.study_id = m.study_id AND a.point = m.point "
+                      "WHERE m.study_id = ? ORDER BY m.point, m.model DESC");
+  q.bind(1, study_id);
+  std::vector<PointMetrics> rows;
+  while (q.step()) {
+    PointMetrics m;
+    m.point = static_cast<int>(q.column_int(0));
+    m.model = q.column_text(1);
+    m.run_id = q.column_int(2);
+    m.dissipated_impact_J = q.column_double(3);
+    m.dissipated_friction_J = q.column_double(4);
+    m.dissipated_viscous_J = q.column_double(5);
+    m.psi_peak = q.column_optional_double(6);
+    m.psi_peak_gamma = q.column_optional_double(7);
+    m.final_amplitude_m = q.column_optional_double(8);
+    m.cycles = q.column_int(9);
+    m.energy_balance_rel_err = q.column_double(10);
+    m.wall_time_s = q.column_double(11);
+    m.dissipated_rel_diff = q.column_optional_double(12);
+    m.envelope_max_rel_diff = q.column_optional_double(13);
+    rows.push_back(std::move(m));
+  }
+  return rows;
+}
+
+std::optional<int> StudyStore::claim_point(std::int64_t study_id, int point, const ProcessLease& lease) {
+  return sqlite::write_transaction(db(), [&]() -> std::optional<int> {
+    sqlite::Statement claim(db(), with_now("UPDATE study_points SET status = 'running', attempt = attempt + 1, "
+                                           "message = '', lease_host = ?, lease_pid = ?, lease_start = ?, "
+                                           "ended_at = NULL, comparison_id = NULL, started_at = ",
+                                           " WHERE study_id = ? AND point = ? "
+                                           "AND status IN ('pending', 'failed', 'interrupted') RETURNING attempt"));
+    claim.bind(1, lease.host).bind(2, lease.pid).bind(3, lease.start_ticks).bind(4, study_id).bind(5, point);
+    if (!claim.step()) return std::nullopt;
+    const int attempt = static_cast<int>(claim.column_int(0));
+    claim.reset();
+    // A redone point's earlier metrics belong to runs of an earlier attempt.
+    sqlite::Statement old(db(), "DELETE FROM study_point_metrics WHERE study_id = ? AND point = ?");
+    old.bind(1, study_id).bind(2, point).run();
+    return attempt;
+  });
+}
+
+void StudyStore::link_run(std::int64_t study_id, int point, int attempt, std::string_view model, std::int64_t run_id) {
+  sqlite::write_transaction(db(), [&] {
+    sqlite::Statement link(
+        db(), "INSERT INTO study_point_runs (study_id, point, attempt, model, run_id) VALUES (?, ?, ?, ?, ?)");
+    link.bind(1, study_id).bind(2, point).bind(3, attempt).bind(4, model).bind(5, run_id).run();
+  });
+}
+
+void StudyStore::complete_point(std::int64_t study_id, int point, int attempt, const std::vector<std::int64_t>& run_ids,
+                                std::optional<std::int64_t> comparison_id) {
+  sqlite::write_transaction(db(), [&] {
+    sqlite::Statement metrics(
+        db(),
+        "INSERT INTO study_point_metrics (study_id, point, model, run_id, dissipated_impact_J, dissipated_friction_J, "
+        "dissipated_viscous_J, psi_peak, psi_peak_gamma, final_amplitude_m, cycles, energy_balance_rel_err, "
+        "wall_time_s) "
+        "SELECT ?1, ?2, r.model, r.run_id, last.dissipated_impact_J, last.dissipated_friction_J, "
+        "last.dissipated_viscous_J, peak.psi, peak.gamma, last_cycle.amplitude_m, "
+        "(SELECT count(*) FROM cycles WHERE run_id = r.run_id), r.energy_balance_rel_err, r.wall_time_s "
+        "FROM runs r "
+        "JOIN samples last ON last.run_id = r.run_id "
+        "AND last.t_s = (SELECT max(t_s) FROM samples WHERE run_id = r.run_id) "
+        "LEFT JOIN cycles peak ON peak.run_id = r.run_id "
+        "AND peak.cycle = (SELECT cycle FROM cycles WHERE run_id = r.run_id ORDER BY psi DESC, cycle LIMIT 1) "
+        "LEFT JOIN cycles last_cycle ON last_cycle.run_id = r.run_id "
+        "AND last_cycle.cycle = (SELECT max(cycle) FROM cycles WHERE run_id = r.run_id) "
+        "WHERE r.run_id = ?3 AND r.status = 'completed'");
+    for (const std::int64_t run_id : run_ids) {
+      metrics.bind(1, study_id).bind(2, point).bind(3, run_id);
+      metrics.run();
+      if (db().changes() != 1) {
+        throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) + ": run " +
+                             std::to_string(run_id) + " is not a completed run with samples");
+      }
+    }
+    sqlite::Statement done(db(), with_now("UPDATE study_points SET status = 'completed', message = '', "
+                                          "lease_host = NULL, lease_pid = NULL, lease_start = NULL, comparison_id = ?, "
+                                          "ended_at = ",
+                                          " WHERE study_id = ? AND point = ? AND attempt = ? AND status = 'running'"));
+    if (comparison_id) {
+      done.bind(1, *comparison_id);
+    } else {
+      done.bind_null(1);
+    }
+    done.bind(2, study_id).bind(3, point).bind(4, attempt).run();
+    if (db().changes() != 1) {
+      throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) + " attempt " +
+                           std::to_string(attempt) + " is no longer running here; its results are not counted");
+    }
+  });
+}
+
+void StudyStore::end_point(std::int64_t study_id, int point, int attempt, PointStatus status,
+                           const std::string& message) {
+  sqlite::write_transaction(db(), [&] {
+    sqlite::Statement end(db(), with_now("UPDATE study_points SET status = ?, message = ?, lease_host = NULL, "
+                                         "lease_pid = NULL, lease_start = NULL, ended_at = ",
+                                         " WHERE study_id = ? AND point = ? AND attempt = ? AND status = 'running'"));
+    end.bind(1, to_string(status)).bind(2, message).bind(3, study_id).bind(4, point).bind(5, attempt).run();
+  });
+}
+
+bool StudyStore::abandon_point(std::int64_t study_id, int point, const ProcessLease& lease, PointStatus status,
+                               const std::string& message) {
+  return sqlite::write_transaction(db(), [&] {
+    sqlite::Statement end(db(),
+                          with_now("UPDATE study_points SET status = ?1, message = ?2, "
+                                   "lease_host = NULL, lease_pid = NULL, lease_start = NULL, ended_at = ",
+                                   " WHERE study_id = ?3 AND point = ?4 AND status = 'running' "
+                                   "AND lease_host = ?5 AND lease_pid = ?6 AND lease_start = ?7 RETURNING attempt"));
+    end.bind(1, to_string(status)).bind(2, message).bind(3, study_id).bind(4, point).bind(5, lease.host);
+    end.bind(6, lease.pid).bind(7, lease.start_ticks);
+    if (!end.step()) return false;
+    const std::int64_t attempt = end.column_int(0);
+    end.reset();
+    sqlite::Statement runs(db(), with_now("UPDATE runs SET status = ?1, message = ?2, ended_at = ",
+                                          " WHERE status = 'running' AND run_id IN (SELECT run_id FROM "
+                                          "study_point_runs WHERE study_id = ?3 AND point = ?4 AND attempt = ?5)"));
+    runs.bind(1, to_string(status)).bind(2, message).bind(3, study_id).bind(4, point).bind(5, attempt).run();
+    return true;
+  });
+}
+
+}  // namespace pdamp

@@ -1,0 +1,144 @@
+#include "pdamp/study/point_runner.hpp"
+
+#include <cstdio>
+#include <optional>
+#include <vector>
+
+#include "pdamp/compare/comparison.hpp"
+#include "pdamp/errors.hpp"
+#include "pdamp/sim/initial_bed.hpp"
+#include "pdamp/sim/stored_run.hpp"
+#include "pdamp/study/lease.hpp"
+
+namespace pdamp::study {
+namespace {
+
+/// Why a point could not be claimed, from its stored state.
+std::string not_claimed(StudyStore& studies, std::int64_t study_id, int point) {
+  const auto p = studies.point(study_id, point);
+  if (!p) throw InputError("study " + std::to_string(study_id) + " has no point " + std::to_string(point));
+  if (p->status == PointStatus::running && p->lease) {
+    return "point " + std::to_string(point) + " is running in process " + std::to_string(p->lease->pid) + " on " +
+           p->lease->host;
+  }
+  return "point " + std::to_string(point) + " is " + std::string(to_string(p->status));
+}
+
+/// The point's runs: their ids, the run that ended it if it did not complete, and the
+/// comparison of a `both` point.
+struct PointRuns {
+  std::vector<StoredRun> runs;
+  std::optional<std::int64_t> comparison_id;
+};
+
+class PointExecution {
+ public:
+  PointExecution(RunStore& store, std::int64_t study_id, const Study& study, int point, int attempt,
+                 const PointRunControl& control)
+      : store_(&store),
+        studies_(store),
+        study_id_(study_id),
+        study_(&study),
+        point_(point),
+        attempt_(attempt),
+        control_(&control) {}
+
+  PointRuns run() {
+    const Scenario scenario = point_scenario(*study_, study_->points.at(static_cast<std::size_t>(point_ - 1)));
+    std::vector<RunPlan> plans;
+    if (study_->file.models != StudyModels::hard) plans.push_back(plan_run(Model::soft, scenario));
+    if (study_->file.models != StudyModels::soft) plans.push_back(plan_run(Model::hard, scenario));
+    // Settled (or taken from the store) when the first run needs it, after that run's row.
+    std::optional<InitialBed> bed;
+    const BedSource bed_source = [&]() -> const InitialBed& {
+      if (!bed) {
+        report(0.0, "settling");
+        bed =
+            prepare_initial_bed(scenario, *store_, control_->stop, [this](double, double) { report(0.0, "settling"); });
+      }
+      return *bed;
+    };
+    PointRuns result;
+    for (std::size_t m = 0; m < plans.size(); ++m) {
+      const std::string_view model = to_string(plans[m].model);
+      RunControl run_control;
+      run_control.stop = control_->stop;
+      run_control.progress = [&, duration = scenario.run.duration_s](double t) {
+        report((static_cast<double>(m) + t / duration) / static_cast<double>(plans.size()), model);
+      };
+      result.runs.push_back(
+          run_and_store(*store_, plans[m], bed_source, run_control, control_->warn,
+                        [&](std::int64_t run_id) { studies_.link_run(study_id_, point_, attempt_, model, run_id); }));
+      if (result.runs.back().outcome.status != RunStatus::completed) return result;
+    }
+    if (plans.size() == 2) {
+      result.comparison_id =
+          store_comparison(*store_, scenario, bed_source().state_id, result.runs[0].run_id, result.runs[1].run_id)
+              .first;
+    }
+    return result;
+  }
+
+ private:
+  void report(double fraction, std::string_view phase) const {
+    if (control_->progress) control_->progress(fraction, phase);
+  }
+
+  RunStore* store_;
+  StudyStore studies_;
+  std::int64_t study_id_;
+  const Study* study_;
+  int point_, attempt_;
+  const PointRunControl* control_;
+};
+
+PointResult finish(StudyStore& studies, std::int64_t study_id, int point, int attempt, const PointRuns& result) {
+  std::vector<std::int64_t> run_ids;
+  for (const auto& run : result.runs) {
+    if (run.outcome.status != RunStatus::completed) {
+      const PointStatus status =
+          run.outcome.status == RunStatus::interrupted ? PointStatus::interrupted : PointStatus::failed;
+      const std::string message = "run " + std::to_string(run.run_id) + ": " + run.outcome.message;
+      studies.end_point(study_id, point, attempt, status, message);
+      return {status, attempt, message};
+    }
+    run_ids.push_back(run.run_id);
+  }
+  studies.complete_point(study_id, point, attempt, run_ids, result.comparison_id);
+  return {PointStatus::completed, attempt, ""};
+}
+
+}  // namespace
+
+std::string progress_line(double fraction, std::string_view phase) {
+  char text[32];
+  std::snprintf(text, sizeof text, "progress %.4f ", fraction);
+  return text + std::string(phase) + "\n";
+}
+
+Study stored_study(const StudyRecord& record) {
+  return make_study({record.study_file, record.study_text, record.scenario_file, record.scenario_text}, true);
+}
+
+PointResult run_study_point(RunStore& store, std::int64_t study_id, const Study& study, int point,
+                            const PointRunControl& control) {
+  if (point < 1 || static_cast<std::size_t>(point) > study.points.size()) {
+    throw InputError("study " + std::to_string(study_id) + " has points 1 to " + std::to_string(study.points.size()) +
+                     ", not " + std::to_string(point));
+  }
+  StudyStore studies(store);
+  const auto attempt = studies.claim_point(study_id, point, this_process_lease());
+  if (!attempt) return {PointStatus::pending, 0, not_claimed(studies, study_id, point)};
+  try {
+    return finish(studies, study_id, point, *attempt,
+                  PointExecution(store, study_id, study, point, *attempt, control).run());
+  } catch (const Interrupted& e) {
+    studies.end_point(study_id, point, *attempt, PointStatus::interrupted, e.what());
+    return {PointStatus::interrupted, *attempt, e.what()};
+  } catch (const std::exception& e) {
+    studies.end_point(study_id, point, *attempt, PointStatus::failed, e.what());
+    return {PointStatus::failed, *attempt, e.what()};
+  }
+}
+
+}  // namespace pdamp::study

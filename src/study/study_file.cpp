@@ -1,0 +1,312 @@
+#include "pdamp/study/study_file.hpp"
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "pdamp/errors.hpp"
+#include "pdamp/scenario/ini.hpp"
+#include "pdamp/scenario/scenario_loader.hpp"
+
+namespace pdamp::study {
+
+namespace {
+
+constexpr std::array<std::pair<StudyModels, std::string_view>, 3> model_names{
+    {{StudyModels::soft, "soft"}, {StudyModels::hard, "hard"}, {StudyModels::both, "both"}}};
+
+}  // namespace
+
+std::string_view to_string(StudyModels models) {
+  for (const auto& [value, name] : model_names) {
+    if (value == models) return name;
+  }
+  throw RuntimeFailure("a study's models out of range");
+}
+
+std::size_t Sweep::points_up_to(std::size_t limit) const {
+  std::size_t points = 1;
+  for (const auto& axis : axes) {
+    if (axis.size() > limit || points > limit / axis.size()) return limit + 1;
+    points *= axis.size();
+  }
+  return points;
+}
+
+namespace {
+
+[[noreturn]] void fail(const std::string& where, const std::string& why) { throw InputError(where + ": " + why); }
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
+/// Why `key` cannot be swept, or nothing if it can.
+std::optional<std::string> unsweepable(const std::string& key) {
+  if (key == "scenario.name")
+    return std::string("scenario.name cannot be swept: the study names each point's scenario");
+  const auto keys = scenario_key_names();
+  if (std::find(keys.begin(), keys.end(), key) != keys.end()) return std::nullopt;
+  std::string why = "'" + key + "' is not a scenario key";
+  const auto closest = std::min_element(keys.begin(), keys.end(), [&](const std::string& a, const std::string& b) {
+    return edit_distance(key, a) < edit_distance(key, b);
+  });
+  if (edit_distance(key, *closest) <= 3) why += "; did you mean " + *closest + "?";
+  return why + " (run 'pdamp keys' for the list)";
+}
+
+std::vector<std::string> split_keys(const std::string& text) {
+  std::string spaced = text;
+  std::replace(spaced.begin(), spaced.end(), ',', ' ');
+  std::istringstream in(spaced);
+  std::vector<std::string> keys;
+  for (std::string k; in >> k;) keys.push_back(k);
+  return keys;
+}
+
+/// A value as compared for duplicates: a single number by its value, anything else by its
+/// words.
+std::string comparable(const std::string& value) {
+  std::istringstream in(value);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  if (words.size() == 1) {
+    std::size_t used = 0;
+    try {
+      const double x = std::stod(words[0], &used);
+      if (used == words[0].size()) {
+        std::ostringstream out;
+        out.precision(17);
+        out << x;
+        return out.str();
+      }
+    } catch (const std::exception&) {
+      // not a number: compared as text
+    }
+  }
+  std::string joined;
+  for (const auto& w : words) joined += (joined.empty() ? "" : " ") + w;
+  return joined;
+}
+
+class SweepBuilder {
+ public:
+  explicit SweepBuilder(const ini::Section& header) : header_(header) { sweep_.section = header.name; }
+
+  void add(const ini::Entry& entry) {
+    if (entry.key == "zip") {
+      add_zip(entry);
+      return;
+    }
+    if (const auto why = unsweepable(entry.key)) fail(entry.where, "[" + sweep_.section + "] " + *why);
+    for (const auto& k : keys_) {
+      if (k.key == entry.key) {
+        fail(entry.where, "[" + sweep_.section + "] " + entry.key + " is given twice (first on line " +
+                              std::to_string(k.line) + ")");
+      }
+    }
+    keys_.push_back({entry.key, entry.line, entry.where,
+                     parse_sweep_values(entry.value, entry.where + ": [" + sweep_.section + "] " + entry.key)});
+  }
+
+  Sweep build() {
+    if (keys_.empty()) fail(header_.where, "[" + sweep_.section + "] has no keys: give each key to vary its values");
+    std::set<std::size_t> emitted;
+    for (const auto& k : keys_) {
+      const auto zip = zip_of(k.key);
+      if (!zip) {
+        sweep_.axes.push_back(single_axis(k));
+      } else if (emitted.insert(*zip).second) {
+        sweep_.axes.push_back(zipped_axis(zips_[*zip]));
+      }
+    }
+    return sweep_;
+  }
+
+ private:
+  struct Key {
+    std::string key;
+    int line;
+    std::string where;
+    std::vector<std::string> values;
+  };
+  struct Zip {
+    std::vector<std::string> keys;
+    int line;
+    std::string where;
+  };
+
+  void add_zip(const ini::Entry& entry) {
+    const auto keys = split_keys(entry.value);
+    const std::string where = "[" + sweep_.section + "] zip = " + entry.value;
+    if (keys.size() < 2) fail(entry.where, where + ": a zip names two or more keys to vary together");
+    for (const auto& key : keys) {
+      if (const auto why = unsweepable(key)) fail(entry.where, where + ": " + *why);
+      if (std::count(keys.begin(), keys.end(), key) > 1) fail(entry.where, where + ": " + key + " is named twice");
+      if (zip_of(key)) fail(entry.where, where + ": " + key + " is already in another zip");
+    }
+    zips_.push_back({keys, entry.line, entry.where});
+  }
+
+  std::optional<std::size_t> zip_of(const std::string& key) const {
+    for (std::size_t z = 0; z < zips_.size(); ++z) {
+      if (std::find(zips_[z].keys.begin(), zips_[z].keys.end(), key) != zips_[z].keys.end()) return z;
+    }
+    return std::nullopt;
+  }
+
+  const Key& key_named(const std::string& name, const Zip& zip) const {
+    for (const auto& k : keys_) {
+      if (k.key == name) return k;
+    }
+    fail(zip.where, "[" + sweep_.section + "] zip names " + name + ", which has no values in this section");
+  }
+
+  SweepAxis single_axis(const Key& k) const {
+    SweepAxis axis{{k.key}, {}};
+    std::map<std::string, std::size_t> seen;
+    for (std::size_t i = 0; i < k.values.size(); ++i) {
+      if (const auto [it, fresh] = seen.emplace(comparable(k.values[i]), i); !fresh) {
+        fail(k.where, "[" + sweep_.section + "] " + k.key + ": the value '" + k.values[i] + "' appears twice (values " +
+                          std::to_string(it->second + 1) + " and " + std::to_string(i + 1) + ")");
+      }
+      axis.values.push_back({k.values[i]});
+    }
+    return axis;
+  }
+
+  SweepAxis zipped_axis(const Zip& zip) const {
+    SweepAxis axis{zip.keys, {}};
+    const Key& first = key_named(zip.keys.front(), zip);
+    for (const auto& name : zip.keys) {
+      const Key& k = key_named(name, zip);
+      if (k.values.size() != first.values.size()) {
+        fail(k.where, "[" + sweep_.section + "] " + name + " has " + std::to_string(k.values.size()) + " values and " +
+                          first.key + " " + std::to_string(first.values.size()) + ": zipped keys (line " +
+                          std::to_string(zip.line) + ") need as many values each");
+      }
+    }
+    std::map<std::vector<std::string>, std::size_t> seen;
+    for (std::size_t i = 0; i < first.values.size(); ++i) {
+      std::vector<std::string> tuple, key;
+      for (const auto& name : zip.keys) {
+        tuple.push_back(key_named(name, zip).values[i]);
+        key.push_back(comparable(tuple.back()));
+      }
+      if (const auto [it, fresh] = seen.emplace(key, i); !fresh) {
+        fail(zip.where, "[" + sweep_.section + "] the zipped values " + std::to_string(it->second + 1) + " and " +
+                            std::to_string(i + 1) + " are the same");
+      }
+      axis.values.push_back(tuple);
+    }
+    return axis;
+  }
+
+  ini::Section header_;
+  Sweep sweep_;
+  std::vector<Key> keys_;
+  std::vector<Zip> zips_;
+};
+
+bool is_sweep_section(const std::string& section) {
+  if (section == "sweep") return true;
+  if (!section.starts_with("sweep.") || section.size() == 6) return false;
+  return std::all_of(section.begin() + 6, section.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
+  });
+}
+
+StudyModels parse_models(const ini::Entry& entry) {
+  for (const auto& [value, name] : model_names) {
+    if (name == entry.value) return value;
+  }
+  fail(entry.where, "[study] models = '" + ini::printable(entry.value) +
+                        "': must be soft, hard or both (both models from one settled bed, compared)");
+}
+
+/// The study file's sections: [study] and the sweeps, each once, and nothing before them.
+void check_sections(const ini::Document& document) {
+  std::map<std::string, int> seen;
+  for (const auto& section : document.sections) {
+    if (section.name == "frf" || section.name.starts_with("frf.")) {
+      fail(section.where, "[" + section.name +
+                              "]: frequency-response studies are not yet supported; this pdamp runs [sweep] "
+                              "studies only");
+    }
+    if (section.name != "study" && !is_sweep_section(section.name)) {
+      fail(section.where, "unknown section [" + ini::printable(section.name) +
+                              "]: a study file has [study] and one or more [sweep] or "
+                              "[sweep.NAME] sections (NAME of letters, digits, _ and -)");
+    }
+    if (const auto [it, fresh] = seen.emplace(section.name, section.line); !fresh) {
+      fail(section.where, "[" + section.name + "] appears twice (first on line " + std::to_string(it->second) + ")");
+    }
+  }
+  if (!document.entries.empty() && document.entries.front().section.empty()) {
+    const auto& entry = document.entries.front();
+    fail(entry.where,
+         "'" + ini::printable(entry.key) + " = " + ini::printable(entry.value) + "' comes before any [section] header");
+  }
+}
+
+}  // namespace
+
+StudyFile parse_study_file(const std::string& text, const std::string& origin, const std::string& default_name) {
+  const ini::Document document = ini::parse(text, origin);
+  check_sections(document);
+  StudyFile study;
+  study.name = default_name;
+  std::map<std::string, int> given;  // [study] keys and their lines
+  std::map<std::string, SweepBuilder> builders;
+  for (const auto& section : document.sections) {
+    if (section.name != "study") builders.emplace(section.name, SweepBuilder(section));
+  }
+  for (const auto& entry : document.entries) {
+    if (entry.section != "study") {
+      builders.at(entry.section).add(entry);
+      continue;
+    }
+    if (const auto [it, fresh] = given.emplace(entry.key, entry.line); !fresh) {
+      fail(entry.where, "[study] " + entry.key + " is given twice (first on line " + std::to_string(it->second) + ")");
+    }
+    if (entry.key == "name") {
+      if (entry.value.empty()) fail(entry.where, "[study] name is empty");
+      study.name = entry.value;
+    } else if (entry.key == "scenario") {
+      if (entry.value.empty()) fail(entry.where, "[study] scenario is empty: name the base scenario file");
+      study.scenario = entry.value;
+    } else if (entry.key == "models") {
+      study.models = parse_models(entry);
+    } else {
+      fail(entry.where, "[study] has no key '" + ini::printable(entry.key) + "' (valid: name, scenario, models)");
+    }
+  }
+  for (const char* key : {"scenario", "models"}) {
+    if (!given.contains(key)) {
+      throw InputError(origin + ": [study] " + key + " is missing" +
+                       (std::string(key) == "scenario" ? " (the base scenario file, relative to the study file)"
+                                                       : " (soft, hard or both)"));
+    }
+  }
+  for (const auto& section : document.sections) {
+    if (section.name != "study") study.sweeps.push_back(builders.at(section.name).build());
+  }
+  if (study.sweeps.empty()) throw InputError(origin + ": no [sweep] section: a study varies at least one key");
+  return study;
+}
+
+}  // namespace pdamp::study

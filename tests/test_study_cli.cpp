@@ -1,0 +1,368 @@
+/// End-to-end tests of `pdamp study`: validation before anything is written, the stored
+/// study, resuming without redoing, refusing a changed study, the same bits for any
+/// --jobs, and a study killed mid-run that resumes to the same results.
+#include <doctest/doctest.h>
+
+#include <chrono>
+#include <fstream>
+#include <map>
+#include <thread>
+#include <tuple>
+
+#include "pdamp/store/run_store.hpp"
+#include "test_process.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using namespace pdamp::test;
+
+namespace {
+
+void write(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file);
+  out << text;
+}
+
+std::string small() { return test::scenario_file("small").string(); }
+
+/// A study file on small.ini.
+std::string study_text(const std::string& models, const std::string& sweep) {
+  return "[study]\nscenario = " + small() + "\nmodels = " + models + "\n\n[sweep]\n" + sweep;
+}
+
+/// The runs of each point's latest attempt in store `alias`, by point and model.
+std::string latest_runs(const std::string& alias) {
+  return "(SELECT l.point, l.model, l.run_id FROM " + alias + ".study_point_runs l JOIN " + alias +
+         ".study_points p ON p.study_id = l.study_id AND p.point = l.point AND p.attempt = l.attempt)";
+}
+
+/// How many samples of the latest attempts' runs differ between two stores of one study
+/// (bit for bit, in every column, or missing from either), and how many there are.
+std::pair<std::int64_t, std::int64_t> sample_differences(const std::filesystem::path& a,
+                                                         const std::filesystem::path& b) {
+  sqlite::Database d(a);
+  d.exec("ATTACH '" + b.string() + "' AS b");
+  std::string differs = "y.run_id IS NULL";
+  for (const char* column : {"host_z_m", "host_v_m_s", "particle_translational_J", "particle_rotational_J",
+                             "host_kinetic_J", "spring_potential_J", "gravitational_potential_J", "contact_elastic_J",
+                             "excitation_work_J", "dissipated_impact_J", "dissipated_friction_J",
+                             "dissipated_viscous_J", "energy_balance_rel_err", "contacts", "events", "steps"}) {
+    differs += std::string(" OR x.") + column + " IS NOT y." + column;
+  }
+  sqlite::Statement q(d, "SELECT sum(" + differs + "), count(*), (SELECT count(*) FROM " + latest_runs("b") +
+                             " rb JOIN b.samples USING (run_id)) FROM " + latest_runs("main") + " ra JOIN " +
+                             latest_runs("b") +
+                             " rb USING (point, model) JOIN main.samples x ON x.run_id = ra.run_id "
+                             "LEFT JOIN b.samples y ON y.run_id = rb.run_id AND y.t_s = x.t_s");
+  q.step();
+  const std::int64_t missing_in_a = q.column_int(2) - q.column_int(1);
+  return {q.column_int(0) + missing_in_a, q.column_int(1)};
+}
+
+/// How many point metrics differ between two stores of one study (all but the wall time).
+std::int64_t metric_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
+  sqlite::Database d(a);
+  d.exec("ATTACH '" + b.string() + "' AS b");
+  std::string differs = "y.point IS NULL";
+  for (const char* column : {"dissipated_impact_J", "dissipated_friction_J", "dissipated_viscous_J", "psi_peak",
+                             "psi_peak_gamma", "final_amplitude_m", "cycles", "energy_balance_rel_err"}) {
+    differs += std::string(" OR x.") + column + " IS NOT y." + column;
+  }
+  sqlite::Statement q(d, "SELECT sum(" + differs +
+                             ") + abs(count(*) - (SELECT count(*) FROM b.study_point_metrics)) "
+                             "FROM main.study_point_metrics x LEFT JOIN b.study_point_metrics y USING (point, model)");
+  q.step();
+  return q.column_int(0);
+}
+
+/// Waits (up to a minute) until the store says `sql` is true.
+bool wait_until(const std::filesystem::path& db, const std::string& sql) {
+  for (int i = 0; i < 1200; ++i) {
+    if (std::filesystem::exists(db) &&
+        count_rows(db, "SELECT count(*) FROM sqlite_schema WHERE name = 'study_points'") && count_rows(db, sql) != 0) {
+      return true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("a bad study exits with code 2 and one message naming the problem, and writes nothing") {
+  test::TempDir dir("study-bad");
+  const auto db = dir / "runs.sqlite";
+  const std::string grid = "host.z0_m = 0.001:0.01:40\nhost.damping_N_s_m = 0.01:0.1:30\nparticles.count = 0\n";
+  struct Case {
+    std::string name, text, message;
+    std::vector<std::string> extra = {};
+  };
+  const std::vector<Case> cases{
+      {"misspelled key", study_text("hard", "particles.cont = 1, 2\n"),
+       "[sweep] 'particles.cont' is not a scenario key; did you mean particles.count?"},
+      {"unknown key", study_text("hard", "damper.size = 1, 2\n"), "'damper.size' is not a scenario key"},
+      {"out of range at one point", study_text("hard", "host.z0_m = 0.01, 0.02\nhost.damping_N_s_m = 0.1, -0.1\n"),
+       "point 2 of 4 ([sweep] host.z0_m = 0.01, host.damping_N_s_m = -0.1): swept host.damping_N_s_m: "
+       "host.damping_N_s_m = '-0.1': must be >= 0"},
+      {"empty range", study_text("hard", "host.z0_m = 0.01:0.01:3\n"), "the range is empty"},
+      {"reversed range", study_text("hard", "host.z0_m = 0.02:0.01:3\n"), "the range is reversed"},
+      {"count below 2", study_text("hard", "host.z0_m = 0.01:0.02:1\n"), "the count must be at least 2"},
+      {"grid over the limit", study_text("hard", grid), "1200 points, more than the 1000 allowed without --force"},
+      {"over the run budget", study_text("hard", "run.duration_s = 0.1, 1000\n"),
+       "point 2 of 2 ([sweep] run.duration_s = 1000): run.max_samples = 1000000: "},
+      {"a '#' in a value", study_text("hard", "host.z0_m = 0.01#m\n"), "'#' directly after text"},
+      {"missing scenario", "[study]\nscenario = nowhere.ini\nmodels = hard\n[sweep]\nhost.z0_m = 0.01\n",
+       "[study] scenario = nowhere.ini: base scenario '" + (dir / "nowhere.ini").string() +
+           "' cannot be read (no such file); the path is relative to the study file"},
+      {"missing models", "[study]\nscenario = " + small() + "\n[sweep]\nhost.z0_m = 0.01\n",
+       "[study] models is missing (soft, hard or both)"},
+      {"unknown models", study_text("all", "host.z0_m = 0.01\n"), "[study] models = 'all': must be soft, hard or both"},
+      {"frequency response", study_text("hard", "host.z0_m = 0.01\n") + "[frf]\nmode = force\n",
+       "[frf]: frequency-response studies are not yet supported"},
+      {"no study file",
+       "",
+       "study file '" + (dir / "absent.ini").string() + "' cannot be read (no such file)",
+       {"absent"}},
+      {"bad jobs",
+       study_text("hard", "host.z0_m = 0.01\n"),
+       "--jobs '0': must be a whole number from 1 to 256",
+       {"--jobs", "0"}},
+  };
+  for (const Case& c : cases) {
+    CAPTURE(c.name);
+    const auto file = dir / "study.ini";
+    write(file, c.text);
+    std::vector<std::string> args{"study", "run", file.string(), "--db", db.string()};
+    if (!c.extra.empty() && c.extra[0] == "absent") {
+      args[2] = (dir / "absent.ini").string();
+    } else {
+      args.insert(args.end(), c.extra.begin(), c.extra.end());
+    }
+    const Result r = pdamp_cli(args, dir);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(c.message) != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+    CHECK(!std::filesystem::exists(db));
+    INFO(r.err);
+  }
+  const Result directory = pdamp_cli({"study", "run", dir.path().string(), "--db", db.string()}, dir);
+  CHECK(directory.code == 2);
+  CHECK(directory.err.find("is a directory, not a regular file") != std::string::npos);
+  CHECK(!std::filesystem::exists(db));
+  // --force lifts the size limit (the host alone runs 1,200 points quickly; validation only here).
+  write(dir / "study.ini", study_text("hard", grid));
+  CHECK(pdamp_cli({"study", "run", (dir / "study.ini").string(), "--db", db.string(), "--jobs", "0", "--force"}, dir)
+            .err.find("--jobs '0'") != std::string::npos);
+}
+
+TEST_CASE("a study runs into the store, lists and shows, resumes without redoing and refuses a changed file") {
+  test::TempDir dir("study-host");
+  const auto db = (dir / "runs.sqlite").string();
+  const auto base = dir / "base.ini";
+  write(base, "[particles]\ncount = 0\n[run]\nduration_s = 0.2\n");
+  const auto file = dir / "host.ini";
+  write(file,
+        "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
+        "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.02\n");
+  Result r = pdamp_cli({"study", "run", file.string(), "--db", db, "--jobs", "2"}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("study 1 'host alone': models hard, 8 points (8 completed") == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs WHERE status = 'completed'") == 8);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_point_metrics WHERE model = 'hard'") == 8);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_point_values WHERE key = 'host.damping_N_s_m' AND number = 0.1") ==
+        2);
+  // The runs are named after the study and their point.
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM runs r JOIN study_point_runs l USING (run_id) "
+                   "WHERE r.scenario_name = 'host alone/' || l.point") == 8);
+  // The host alone: the viscous damper dissipates it all, more for a stiffer damper.
+  CHECK(count_rows(
+            db, "SELECT count(*) FROM study_results WHERE dissipated_impact_J = 0 AND dissipated_viscous_J > 0") == 8);
+
+  const Result list = pdamp_cli({"study", "list", "--db", db}, dir);
+  CHECK(list.code == 0);
+  CHECK(list.out.find("host alone") != std::string::npos);
+  const Result show = pdamp_cli({"study", "show", "1", "--db", db}, dir);
+  CHECK(show.code == 0);
+  CHECK(show.out.find("host.damping_N_s_m = 0.15, host.z0_m = 0.02") != std::string::npos);
+  CHECK(pdamp_cli({"study", "show", "7", "--db", db}, dir).code == 2);
+
+  // Again, unchanged but reworded: nothing is run twice.
+  write(file,
+        "# the same study\n[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
+        "host.damping_N_s_m = 0.05, 0.1, 0.15, 0.2\nhost.z0_m = 0.01,0.02\n");
+  r = pdamp_cli({"study", "run", file.string(), "--db", db}, dir);
+  CHECK(r.code == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs") == 8);
+
+  // A changed value, or a changed base scenario, is refused with the difference named.
+  write(file,
+        "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
+        "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.03\n");
+  r = pdamp_cli({"study", "run", file.string(), "--db", db}, dir);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("study 'host alone' (study 1 in '" + db +
+                   "') was made from another definition:\n"
+                   "  [sweep] host.z0_m: '0.01, 0.03' now, '0.01, 0.02' stored") != std::string::npos);
+  CHECK(pdamp_cli({"study", "resume", "1", "--db", db}, dir).code == 2);
+  write(file,
+        "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
+        "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.02\n");
+  write(base, "[particles]\ncount = 0\n[run]\nduration_s = 0.3\n");
+  r = pdamp_cli({"study", "run", file.string(), "--db", db}, dir);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("base scenario [run] duration_s: '0.3' now, '0.2' stored") != std::string::npos);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs") == 8);
+  CHECK(count_rows(db, "SELECT count(*) FROM studies") == 1);
+
+  // With its files gone, a study resumes from the definition stored with it.
+  std::filesystem::remove(base);
+  r = pdamp_cli({"study", "resume", "1", "--db", db}, dir);
+  CHECK(r.code == 0);
+  CHECK(r.err.find("resuming from the definition stored with it") != std::string::npos);
+}
+
+TEST_CASE("a study gives the same bits for any --jobs: every sample of every run, and the metrics") {
+  test::TempDir dir("study-jobs");
+  const auto file = dir / "both.ini";
+  // Two beds (30 and 60 spheres), each run by both models at two host dampings.
+  write(file, study_text("both", "particles.count = 30, 60\nhost.damping_N_s_m = 0.1, 0.3\nrun.duration_s = 0.08\n"));
+  std::map<int, std::filesystem::path> stores;
+  for (const int jobs : {1, 3}) {
+    stores[jobs] = dir / ("jobs" + std::to_string(jobs) + ".sqlite");
+    const Result r =
+        pdamp_cli({"study", "run", file.string(), "--db", stores[jobs].string(), "--jobs", std::to_string(jobs)}, dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(count_rows(stores[jobs], "SELECT count(*) FROM runs WHERE status = 'completed'") == 8);
+    CHECK(count_rows(stores[jobs], "SELECT count(*) FROM study_agreement") == 4);
+  }
+  const auto [differing, compared] = sample_differences(stores[1], stores[3]);
+  CHECK(compared == 8 * 161);
+  CHECK(differing == 0);
+  CHECK(metric_differences(stores[1], stores[3]) == 0);
+  CHECK(count_rows(stores[3], "SELECT count(*) FROM study_point_metrics") == 8);
+}
+
+namespace {
+
+/// Six points of small.ini's soft model, a quarter of a second each, one shared bed.
+std::filesystem::path six_points(const test::TempDir& dir) {
+  const auto file = dir / "six.ini";
+  write(file, study_text("soft", "host.damping_N_s_m = 0.1:0.6:6\nrun.duration_s = 0.25\n"));
+  return file;
+}
+
+/// A point of the study is running and has stored some samples in its current attempt.
+constexpr const char* mid_run =
+    "SELECT count(*) > 40 FROM study_points p JOIN study_point_runs l USING (study_id, point, attempt) "
+    "JOIN samples s USING (run_id) WHERE p.status = 'running'";
+
+}  // namespace
+
+TEST_CASE("a study killed mid-run loses only its points in progress and resumes to the same bits") {
+  test::TempDir dir("study-kill");
+  const auto file = six_points(dir);
+  const auto reference = dir / "reference.sqlite", killed = dir / "killed.sqlite";
+  REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", reference.string(), "--jobs", "2"}, dir).code == 0);
+  const std::vector<std::string> run{"study", "run", file.string(), "--db", killed.string(), "--jobs", "2"};
+
+  // SIGKILL of the study process alone: its workers stop and store their points as interrupted.
+  {
+    Process study(run, dir, "study", Group::own);
+    REQUIRE(wait_until(killed, mid_run));
+    study.signal(SIGKILL);
+    CHECK(study.wait() == 128 + SIGKILL);
+    REQUIRE(wait_until(killed, "SELECT count(*) = 0 FROM study_points WHERE status = 'running'"));
+    CHECK(count_rows(killed,
+                     "SELECT count(*) FROM study_points WHERE status = 'interrupted' "
+                     "AND message LIKE '%stopped by a signal%'") >= 1);
+    study.signal_group(SIGKILL);  // nothing should be left of it
+  }
+  // SIGKILL of the study and its workers: their points stay 'running' under leases whose
+  // processes are gone.
+  {
+    Process study({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir, "resume", Group::own);
+    REQUIRE(wait_until(killed, mid_run));
+    study.signal_group(SIGKILL);
+    CHECK(study.wait() == 128 + SIGKILL);
+  }
+  const std::int64_t completed_before =
+      count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'");
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'running'") >= 1);
+  CHECK(completed_before < 6);
+  CHECK(pdamp_cli({"study", "show", "1", "--db", killed.string()}, dir)
+            .out.find(") is gone; 'pdamp study resume 1' runs it again") != std::string::npos);
+
+  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") == 6);
+  // Completed points were not run again; the others were, from their start.
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE attempt = 1") >= completed_before);
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE attempt > 1") >= 2);
+  CHECK(count_rows(killed, "SELECT count(*) FROM runs WHERE status = 'running'") == 0);
+  CHECK(count_rows(killed,
+                   "SELECT count(*) FROM runs WHERE status = 'interrupted' AND message LIKE '%ended before%'") >= 1);
+  const auto [differing, compared] = sample_differences(reference, killed);
+  CHECK(compared == 6 * 501);
+  CHECK(differing == 0);
+  CHECK(metric_differences(reference, killed) == 0);
+}
+
+TEST_CASE("SIGINT stops a study's workers promptly, and a crashed worker fails only its point") {
+  test::TempDir dir("study-stop");
+  const auto file = six_points(dir);
+  const auto db = dir / "runs.sqlite";
+  {
+    Process study({"study", "run", file.string(), "--db", db.string(), "--jobs", "2"}, dir);
+    REQUIRE(wait_until(db, mid_run));
+    const auto asked = std::chrono::steady_clock::now();
+    study.signal(SIGINT);
+    CHECK(study.wait() == 128 + SIGINT);
+    CHECK(std::chrono::steady_clock::now() - asked < std::chrono::seconds(5));
+    CHECK(study.err().find("stopped; 'pdamp study resume 1' runs the") != std::string::npos);
+    CHECK(count_rows(db, "SELECT count(*) FROM study_points WHERE status = 'running'") == 0);
+    CHECK(count_rows(db, "SELECT count(*) FROM study_points WHERE status = 'interrupted'") >= 1);
+  }
+  {
+    Process study({"study", "resume", "1", "--db", db.string(), "--jobs", "2"}, dir);
+    REQUIRE(wait_until(db, mid_run));
+    const std::int64_t worker = count_rows(db, "SELECT lease_pid FROM study_points WHERE status = 'running' LIMIT 1");
+    REQUIRE(worker > 0);
+    kill(static_cast<pid_t>(worker), SIGKILL);  // a crash (the sanitizers would turn a SIGSEGV into SIGABRT)
+    CHECK(study.wait() == 1);
+    CHECK(count_rows(db,
+                     "SELECT count(*) FROM study_points WHERE status = 'failed' "
+                     "AND message LIKE '%ended with signal 9%'") == 1);
+    CHECK(count_rows(db, "SELECT count(*) FROM study_points WHERE status = 'completed'") == 5);
+    CHECK(study.err().find("failed: its worker (process " + std::to_string(worker) + ") ended with signal 9") !=
+          std::string::npos);
+  }
+  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", db.string()}, dir);
+  CHECK(resumed.code == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_points WHERE status = 'completed'") == 6);
+}
+
+TEST_CASE("pdamp study plot draws a metric against the swept key") {
+  test::TempDir dir("study-plot");
+  const auto file = dir / "plot.ini";
+  write(file, study_text("hard", "particles.count = 0\nhost.damping_N_s_m = 0.05:0.2:4\nrun.duration_s = 0.3\n"));
+  const auto db = (dir / "runs.sqlite").string();
+  REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", db}, dir).code == 0);
+  const auto png = dir / "plot.png";
+  const Result r =
+      pdamp_cli({"study", "plot", "1", "--db", db, "--metric", "dissipated_viscous_J", "--out", png.string()}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  std::ifstream in(png, std::ios::binary);
+  char signature[8] = {};
+  in.read(signature, 8);
+  CHECK(std::string(signature + 1, 3) == "PNG");
+  CHECK(std::filesystem::file_size(png) > 10'000);
+  const Result bad = pdamp_cli({"study", "plot", "1", "--db", db, "--metric", "nonsense"}, dir);
+  CHECK(bad.code == 2);
+  CHECK(bad.err.find("'nonsense' is not a metric") != std::string::npos);
+  CHECK(pdamp_cli({"study", "plot", "2", "--db", db}, dir).code == 2);
+}

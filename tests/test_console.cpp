@@ -1,9 +1,11 @@
-/// What the CLI prints besides results: stored text made safe, fitted tables, progress.
+/// What the CLI prints besides results: stored text made safe, fitted tables, progress of
+/// runs and studies.
 #include <doctest/doctest.h>
 
 #include <sstream>
 
 #include "../src/cli/progress.hpp"
+#include "../src/cli/study_progress.hpp"
 #include "../src/cli/text_table.hpp"
 
 using namespace pdamp;
@@ -97,6 +99,48 @@ TEST_CASE("progress in a log: a line every 30 s, each complete") {
   progress.message("pdamp: warning: w");
   progress.end();
   CHECK(out.str() == "pdamp: warning: w\n");
+}
+
+TEST_CASE("study progress: points done, the points running with their phase, the time left at the mean pace") {
+  FakeClock time;
+  std::ostringstream out;
+  StudyProgress progress(out, false, "fill", 10, 2, 2, time.clock());
+  progress.started(3);
+  progress.started(4);
+  progress.update(6);
+  CHECK(out.str().empty());  // a log line every 30 s
+  time.advance(30.0);
+  progress.progressed(3, 0.5, "hard");
+  progress.progressed(4, 0.01, "settling");
+  progress.update(6);
+  // Before any point completes, the pace is extrapolated from those past 2 %: 60 s a point,
+  // 6 queued + 0.5 + 0.99 points left, 2 at a time.
+  CHECK(out.str() == "pdamp: study fill: 2/10 done; running 3 (hard 50 %), 4 (settling); 3 min 45 s left\n");
+  time.advance(30.0);
+  progress.ended(3, true);
+  progress.ended(4, false);
+  progress.started(5);
+  out.str("");
+  progress.update(5);
+  // One point completed in 60 s: 5 queued + 1 running, 2 at a time.
+  CHECK(out.str() == "pdamp: study fill: 3/10 done, 1 not completed; running 5 (starting); 3 min 00 s left\n");
+  out.str("");
+  progress.message("pdamp: point 5: warning: w");
+  progress.finish();
+  CHECK(out.str() == "pdamp: point 5: warning: w\n");
+}
+
+TEST_CASE("study progress on a terminal: the line redrawn in place, ended by a new line") {
+  FakeClock time;
+  std::ostringstream out;
+  StudyProgress progress(out, true, "fill", 4, 0, 1, time.clock());
+  progress.started(1);
+  time.advance(1.0);
+  progress.update(3);
+  CHECK(out.str() == "\r  study fill: 0/4 done; running 1 (starting)\033[K");
+  out.str("");
+  progress.finish();
+  CHECK(out.str() == "\n");
 }
 
 TEST_CASE("durations read as people write them") {

@@ -70,7 +70,7 @@ std::string StudyProgress::line(int queued) const {
   if (!running_.empty()) {
     text += "; running";
     for (const auto& [point, r] : running_) {
-      text += " " + std::to_string(point) + " (" + r.phase;
+      text += (point == running_.begin()->first ? " " : ", ") + std::to_string(point) + " (" + r.phase;
       if (r.phase != "settling" && r.phase != "starting") {
         text += " " + std::to_string(static_cast<int>(100.0 * r.fraction)) + " %";
       }

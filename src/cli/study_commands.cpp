@@ -18,7 +18,9 @@
 #include "pdamp/study/lease.hpp"
 #include "pdamp/study/point_runner.hpp"
 #include "pdamp/study/study_runner.hpp"
+#include "slurm_commands.hpp"
 #include "study_progress.hpp"
+#include "subcommand.hpp"
 #include "text_table.hpp"
 
 namespace po = boost::program_options;
@@ -43,65 +45,18 @@ constexpr const char* study_usage =
     "          draw a metric against a swept key, one curve per model (python3-matplotlib)\n"
     "  run-point STUDY_ID POINT [--threads N] [--db FILE]\n"
     "          run one point of a stored study in this process (what each worker runs)\n"
+    "  submit STUDY.ini --slurm [--partition P] [--account A] [--time T] [--max-parallel K]\n"
+    "         [--threads N] [--scratch DIR] [--force] [--dry-run] [--db FILE]\n"
+    "  submit --resume STUDY_ID --slurm [options]\n"
+    "          run the study's points on a Slurm cluster: a job array, one task per point, each\n"
+    "          writing a shard store of its own; --resume submits the points missing or failed\n"
+    "  collect STUDY_ID [--db FILE]      merge the finished shard stores into the store\n"
+    "  status STUDY_ID [--db FILE]       each point as the store, the shards and Slurm tell\n"
+    "  task SHARD_FOLDER --job J --task T [--threads N] [--scratch DIR]\n"
+    "          run one task of a job array into its shard store (what the job script runs)\n"
     "\n"
     "A study file names a base scenario, the model(s) and [sweep] sections of scenario keys and\n"
     "their values; data/studies/table4.ini is an example.\n";
-
-/// A study subcommand's command line: its own options, --help, --db, and positional
-/// arguments in order.
-class Subcommand {
- public:
-  Subcommand(const std::string& usage, const std::vector<std::string>& positional) : options_(usage) {
-    options_.add_options()("help,h", "show this help");
-    for (const auto& name : positional) {
-      arguments_.add_options()(name.c_str(), po::value<std::string>());
-      positional_.add(name.c_str(), 1);
-    }
-    options_.add(db_option());
-  }
-  po::options_description_easy_init add_options() { return options_.add_options(); }
-  /// Parses the arguments; false (with the help printed) for --help.
-  bool parse(const std::vector<std::string>& args) {
-    po::options_description all;
-    all.add(options_).add(arguments_);
-    vm_ = parse_options(args, all, positional_).vm;
-    if (!vm_.count("help")) return true;
-    std::cout << options_ << "\n";
-    return false;
-  }
-  const po::variables_map& vm() const { return vm_; }
-
- private:
-  po::options_description options_;    ///< shown by --help
-  po::options_description arguments_;  ///< the positional arguments, named in the usage line
-  po::positional_options_description positional_;
-  po::variables_map vm_;
-};
-
-/// The study named by STUDY_ID in the --db store, as stored.
-struct OpenStudy {
-  OpenStudy(const po::variables_map& vm, const std::string& command, StoreAccess access)
-      : id(parse_whole_number(required_option(vm, "STUDY_ID", command), 1, std::numeric_limits<std::int64_t>::max(),
-                              "STUDY_ID (see 'pdamp study list')")),
-        store(vm["db"].as<std::string>(), access),
-        studies(store),
-        study(stored_study(record())) {}
-
-  std::int64_t id;
-  RunStore store;
-  StudyStore studies;
-  Study study;
-
- private:
-  StudyRecord record() {
-    auto found = studies.study(id);
-    if (!found) {
-      throw InputError("study " + std::to_string(id) + " is not in '" + store.database().file().string() +
-                       "' (see 'pdamp study list')");
-    }
-    return *found;
-  }
-};
 
 void print_study(StudyStore& studies, std::int64_t id, const Study& study, std::ostream& out) {
   const auto summary = studies.summary(id);
@@ -242,13 +197,7 @@ int study_resume(const std::vector<std::string>& args) {
   if (!command.parse(args)) return 0;
   const StudyRunOptions runner = runner_options(command.vm());
   OpenStudy open(command.vm(), "study resume", StoreAccess::modify);
-  // The files as they are now must still describe the stored study.
-  const auto& source = open.study.source;
-  if (std::filesystem::exists(source.study_path) && std::filesystem::exists(source.scenario_path)) {
-    find_or_create_study(open.store, make_study(read_study_source(source.study_path), true));
-  } else {
-    std::cerr << "pdamp: the study's files are gone; resuming from the definition stored with it\n";
-  }
+  check_study_files(open);
   return run_and_report(open.store, open.id, open.study, runner);
 }
 
@@ -353,6 +302,15 @@ int study_plot(const std::vector<std::string>& args) {
 
 }  // namespace
 
+void check_study_files(OpenStudy& open) {
+  const auto& source = open.study.source;
+  if (std::filesystem::exists(source.study_path) && std::filesystem::exists(source.scenario_path)) {
+    find_or_create_study(open.store, make_study(read_study_source(source.study_path), true));
+  } else {
+    std::cerr << "pdamp: the study's files are gone; resuming from the definition stored with it\n";
+  }
+}
+
 int study_command(const std::vector<std::string>& args) {
   if (args.empty() || args[0] == "--help" || args[0] == "-h") {
     std::cout << study_usage;
@@ -365,6 +323,10 @@ int study_command(const std::vector<std::string>& args) {
   if (args[0] == "list") return study_list(rest);
   if (args[0] == "show") return study_show(rest);
   if (args[0] == "plot") return study_plot(rest);
+  if (args[0] == "submit") return study_submit(rest);
+  if (args[0] == "collect") return study_collect(rest);
+  if (args[0] == "status") return study_status(rest);
+  if (args[0] == "task") return study_task(rest);
   throw InputError("unknown study command '" + args[0] + "'\n\n" + study_usage);
 }
 

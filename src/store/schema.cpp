@@ -381,9 +381,40 @@ SELECT p.study_id, p.point, c.comparison_id, c.soft_run_id, c.hard_run_id, c.env
 FROM study_points p JOIN comparisons c ON c.comparison_id = p.comparison_id;
 )sql";
 
-constexpr std::array<std::string_view, 8> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
-                                              v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused,
-                                              v7_run_snapshots,       v8_studies};
+/// Studies on a Slurm cluster (pdamp study submit, collect, status): each job array
+/// submitted, and each of its tasks: the point it runs and, once its shard store is
+/// collected, how it ended. A shard store (written by one task, never shared) holds the
+/// study, its point and its own task's row, not yet collected.
+constexpr std::string_view v9_study_jobs = R"sql(
+CREATE TABLE study_jobs (
+  study_id      INTEGER NOT NULL REFERENCES studies (study_id) ON DELETE CASCADE,
+  job_id        INTEGER NOT NULL CHECK (job_id > 0),  -- Slurm's id of the job array
+  submitted_at  TEXT NOT NULL,                        -- ISO 8601, UTC
+  script_file   TEXT NOT NULL,                        -- the job script (absolute path)
+  shard_folder  TEXT NOT NULL,                        -- where its tasks write their shard stores
+  PRIMARY KEY (study_id, job_id)
+) STRICT;
+
+CREATE TABLE study_tasks (
+  study_id      INTEGER NOT NULL,
+  job_id        INTEGER NOT NULL,
+  task          INTEGER NOT NULL CHECK (task >= 0),  -- its array index, SLURM_ARRAY_TASK_ID
+  point         INTEGER NOT NULL,                    -- the point it runs
+  host          TEXT,                                -- the rest as its shard tells: the node,
+  started_at    TEXT,
+  ended_at      TEXT,
+  outcome       TEXT CHECK (outcome IN ('completed', 'failed', 'interrupted')),  -- its point's status there
+  message       TEXT NOT NULL DEFAULT '',
+  shard_file    TEXT,
+  collected_at  TEXT,                                -- NULL until its shard is merged into this store
+  PRIMARY KEY (study_id, job_id, task),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+)sql";
+
+constexpr std::array<std::string_view, 9> all{
+    v1_runs_samples_cycles, v2_run_statistics,       v3_initial_states, v4_comparisons, v5_solid_fraction,
+    v6_run_ids_never_reused, v7_run_snapshots,       v8_studies,        v9_study_jobs};
 
 }  // namespace
 

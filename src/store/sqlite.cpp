@@ -3,6 +3,7 @@
 #include <sqlite3.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <sstream>
 #include <thread>
@@ -157,6 +158,11 @@ Statement& Statement::bind_null(int index) {
   return *this;
 }
 
+Statement& Statement::bind_column(int index, const Statement& row, int column) {
+  check_bind(sqlite3_bind_value(stmt_, index, sqlite3_column_value(row.stmt_, column)));
+  return *this;
+}
+
 bool Statement::step() {
   const int rc = sqlite3_step(stmt_);
   if (rc == SQLITE_ROW) return true;
@@ -195,6 +201,30 @@ std::string Statement::column_text(int column) const {
 std::optional<double> Statement::column_optional_double(int column) const {
   if (is_null(column)) return std::nullopt;
   return column_double(column);
+}
+
+int Statement::column_count() const { return sqlite3_column_count(stmt_); }
+
+bool Statement::same_value(int column, const Statement& other, int other_column) const {
+  const int type = sqlite3_column_type(stmt_, column);
+  if (type != sqlite3_column_type(other.stmt_, other_column)) return false;
+  switch (type) {
+    case SQLITE_NULL:
+      return true;
+    case SQLITE_INTEGER:
+      return column_int(column) == other.column_int(other_column);
+    case SQLITE_FLOAT:
+      return std::bit_cast<std::uint64_t>(column_double(column)) ==
+             std::bit_cast<std::uint64_t>(other.column_double(other_column));
+    default:  // text and blobs: their bytes
+      break;
+  }
+  const auto* a = static_cast<const char*>(sqlite3_column_blob(stmt_, column));
+  const int size = sqlite3_column_bytes(stmt_, column);
+  const auto* b = static_cast<const char*>(sqlite3_column_blob(other.stmt_, other_column));
+  return size == sqlite3_column_bytes(other.stmt_, other_column) &&
+         (size == 0 ||
+          std::string_view(a, static_cast<std::size_t>(size)) == std::string_view(b, static_cast<std::size_t>(size)));
 }
 
 Transaction::Transaction(Database& db) : db_(&db) { db.exec("BEGIN IMMEDIATE"); }

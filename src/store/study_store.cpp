@@ -119,17 +119,37 @@ std::int64_t StudyStore::create_study(const NewStudy& s, const std::vector<NewSt
         .bind(8, std::string_view(version_string));
     insert.run();
     const std::int64_t id = db().last_insert_rowid();
-    sqlite::Statement point(db(), "INSERT INTO study_points (study_id, point, section) VALUES (?, ?, ?)");
-    sqlite::Statement value(
-        db(), "INSERT INTO study_point_values (study_id, point, key, value, number) VALUES (?, ?, ?, ?, ?)");
-    for (const auto& p : points) {
-      point.bind(1, id).bind(2, p.point).bind(3, p.section).run();
-      for (const auto& [key, text] : p.values) {
-        value.bind(1, id).bind(2, p.point).bind(3, key).bind(4, text).bind(5, single_number(text)).run();
-      }
-    }
+    insert_points(id, points);
     return id;
   });
+}
+
+void StudyStore::copy_study(const StudyRecord& s) {
+  sqlite::write_transaction(db(), [&] {
+    sqlite::Statement insert(db(),
+                             "INSERT INTO studies (study_id, name, models, n_points, study_file, study_text, "
+                             "scenario_file, scenario_text, pdamp_version, created_at) "
+                             "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    insert.bind(1, s.study_id).bind(2, s.name).bind(3, s.models).bind(4, s.n_points).bind(5, s.study_file);
+    insert.bind(6, s.study_text).bind(7, s.scenario_file).bind(8, s.scenario_text).bind(9, s.pdamp_version);
+    insert.bind(10, s.created_at).run();
+  });
+}
+
+void StudyStore::add_points(std::int64_t study_id, const std::vector<NewStudyPoint>& points) {
+  sqlite::write_transaction(db(), [&] { insert_points(study_id, points); });
+}
+
+void StudyStore::insert_points(std::int64_t study_id, const std::vector<NewStudyPoint>& points) {
+  sqlite::Statement point(db(), "INSERT INTO study_points (study_id, point, section) VALUES (?, ?, ?)");
+  sqlite::Statement value(
+      db(), "INSERT INTO study_point_values (study_id, point, key, value, number) VALUES (?, ?, ?, ?, ?)");
+  for (const auto& p : points) {
+    point.bind(1, study_id).bind(2, p.point).bind(3, p.section).run();
+    for (const auto& [key, text] : p.values) {
+      value.bind(1, study_id).bind(2, p.point).bind(3, key).bind(4, text).bind(5, single_number(text)).run();
+    }
+  }
 }
 
 std::optional<StudyRecord> StudyStore::find_study(std::string_view name) {
@@ -138,6 +158,13 @@ std::optional<StudyRecord> StudyStore::find_study(std::string_view name) {
 
 std::optional<StudyRecord> StudyStore::study(std::int64_t study_id) {
   return first_row(db(), std::string(study_columns) + " WHERE study_id = ?", study_id, read_study);
+}
+
+std::vector<StudyRecord> StudyStore::studies() {
+  sqlite::Statement q(db(), std::string(study_columns) + " ORDER BY study_id");
+  std::vector<StudyRecord> records;
+  while (q.step()) records.push_back(read_study(q));
+  return records;
 }
 
 std::vector<StudySummary> StudyStore::list_studies() {
@@ -295,6 +322,65 @@ bool StudyStore::abandon_point(std::int64_t study_id, int point, const ProcessLe
                                           "study_point_runs WHERE study_id = ?3 AND point = ?4 AND attempt = ?5)"));
     runs.bind(1, to_string(status)).bind(2, message).bind(3, study_id).bind(4, point).bind(5, attempt).run();
     return true;
+  });
+}
+
+void StudyStore::record_job(std::int64_t study_id, const StudyJob& job,
+                            const std::vector<std::pair<std::int64_t, int>>& tasks) {
+  sqlite::write_transaction(db(), [&] {
+    sqlite::Statement row(db(), with_now("INSERT INTO study_jobs (study_id, job_id, script_file, shard_folder, "
+                                         "submitted_at) VALUES (?, ?, ?, ?, ",
+                                         ")"));
+    row.bind(1, study_id).bind(2, job.job_id).bind(3, job.script_file).bind(4, job.shard_folder).run();
+    sqlite::Statement task(db(), "INSERT INTO study_tasks (study_id, job_id, task, point) VALUES (?, ?, ?, ?)");
+    for (const auto& [index, point] : tasks)
+      task.bind(1, study_id).bind(2, job.job_id).bind(3, index).bind(4, point).run();
+  });
+}
+
+std::vector<StudyJob> StudyStore::jobs(std::int64_t study_id) {
+  sqlite::Statement q(db(),
+                      "SELECT job_id, submitted_at, script_file, shard_folder FROM study_jobs WHERE study_id = ? "
+                      "ORDER BY job_id");
+  q.bind(1, study_id);
+  std::vector<StudyJob> jobs;
+  while (q.step()) jobs.push_back({q.column_int(0), q.column_text(1), q.column_text(2), q.column_text(3)});
+  return jobs;
+}
+
+std::vector<StudyTask> StudyStore::tasks(std::int64_t study_id) {
+  sqlite::Statement q(db(),
+                      "SELECT job_id, task, point, coalesce(host, ''), coalesce(started_at, ''), "
+                      "coalesce(ended_at, ''), message, coalesce(shard_file, ''), coalesce(collected_at, ''), outcome "
+                      "FROM study_tasks WHERE study_id = ? ORDER BY job_id, task");
+  q.bind(1, study_id);
+  std::vector<StudyTask> tasks;
+  while (q.step()) {
+    StudyTask t{q.column_int(0),  q.column_int(1),  static_cast<int>(q.column_int(2)),
+                q.column_text(3), q.column_text(4), q.column_text(5),
+                q.column_text(6), q.column_text(7), q.column_text(8),
+                std::nullopt};
+    if (!q.is_null(9)) t.outcome = parse_point_status(q.column_text(9));
+    tasks.push_back(std::move(t));
+  }
+  return tasks;
+}
+
+void StudyStore::begin_task(std::int64_t study_id, const StudyTask& task) {
+  sqlite::write_transaction(db(), [&] {
+    sqlite::Statement row(db(), with_now("INSERT INTO study_tasks (study_id, job_id, task, point, host, started_at) "
+                                         "VALUES (?, ?, ?, ?, ?, ",
+                                         ")"));
+    row.bind(1, study_id).bind(2, task.job_id).bind(3, task.task).bind(4, task.point).bind(5, task.host).run();
+  });
+}
+
+void StudyStore::end_task(std::int64_t study_id, std::int64_t job_id, std::int64_t task, PointStatus outcome,
+                          const std::string& message) {
+  sqlite::write_transaction(db(), [&] {
+    sqlite::Statement row(db(), with_now("UPDATE study_tasks SET outcome = ?, message = ?, ended_at = ",
+                                         " WHERE study_id = ? AND job_id = ? AND task = ?"));
+    row.bind(1, to_string(outcome)).bind(2, message).bind(3, study_id).bind(4, job_id).bind(5, task).run();
   });
 }
 

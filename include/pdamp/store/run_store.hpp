@@ -136,6 +136,11 @@ struct StoreOptions {
   /// page: ~0.2 s of CPU for 64 MiB, 2.3 s for 1 GB); larger ones have their run tables
   /// checked, not the samples, cycles and beds, whose damage is reported where read.
   std::uintmax_t full_check_limit_bytes = std::uintmax_t{64} << 20;
+  /// Only this connection ever uses the file (a study task's shard store, possibly on a
+  /// cluster file system): it is locked once for good (locking_mode EXCLUSIVE) and its WAL
+  /// index kept in memory, so SQLite needs neither a -shm file nor further locks, which
+  /// NFS and Lustre do not reliably provide.
+  bool single_process = false;
 };
 
 /// One connection to a store: one per thread (studies run many points in parallel, from

@@ -100,6 +100,9 @@ class Statement {
   Statement& bind(int index, std::optional<double> value);
   Statement& bind(int index, std::optional<std::int64_t> value);
   Statement& bind_null(int index);
+  /// Binds the value in `column` of another statement's current row as it is: its type and
+  /// bits (a row copied between stores).
+  Statement& bind_column(int index, const Statement& row, int column);
 
   /// Steps once: true if a row is available, false when done.
   bool step();
@@ -113,6 +116,10 @@ class Statement {
   std::int64_t column_int(int column) const;
   std::string column_text(int column) const;
   std::optional<double> column_optional_double(int column) const;
+  int column_count() const;
+  /// Whether `column` holds the same type and bits as `other_column` of another statement's
+  /// row (a REAL compared bit for bit: -0.0 differs from 0.0).
+  bool same_value(int column, const Statement& other, int other_column) const;
 
  private:
   void check_bind(int rc);

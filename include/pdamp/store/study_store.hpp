@@ -1,6 +1,7 @@
 #pragma once
 /// Studies in the run store (tables `studies`, `study_points`, `study_point_values`,
-/// `study_point_runs`, `study_point_metrics`). A point is claimed by the
+/// `study_point_runs`, `study_point_metrics`, and for studies on Slurm `study_jobs` and
+/// `study_tasks`). A point is claimed by the
 /// process that runs it (its lease), linked to the runs it makes, and completed with its
 /// metrics in one transaction, so a point is either completed with all its metrics or it
 /// is run again.
@@ -73,14 +74,47 @@ struct PointMetrics {
   std::optional<double> dissipated_rel_diff, envelope_max_rel_diff;  ///< models = both
 };
 
+/// A job array a study was submitted as (pdamp study submit).
+struct StudyJob {
+  std::int64_t job_id = 0;
+  std::string submitted_at, script_file, shard_folder;
+};
+
+/// A task of a study's job array: the point it runs and, once its shard store is collected
+/// (or, in the shard itself, once it has ended), how it went. Texts are empty until known.
+struct StudyTask {
+  std::int64_t job_id = 0, task = 0;
+  int point = 0;
+  std::string host, started_at, ended_at, message, shard_file, collected_at;
+  std::optional<PointStatus> outcome;
+  bool collected() const { return !collected_at.empty(); }
+  /// A task known by its job, index and point alone.
+  static StudyTask of(std::int64_t job_id, std::int64_t task, int point) {
+    StudyTask t;
+    t.job_id = job_id;
+    t.task = task;
+    t.point = point;
+    return t;
+  }
+};
+
 class StudyStore {
  public:
-  explicit StudyStore(RunStore& store) : store_(&store) {}
+  explicit StudyStore(RunStore& store) : db_(&store.database()) {}
+  /// The studies of any connection to a store (a shard store read as it is).
+  explicit StudyStore(sqlite::Database& db) : db_(&db) {}
 
   /// Stores a study and its points (pending), all or nothing; returns its id.
   std::int64_t create_study(const NewStudy& study, const std::vector<NewStudyPoint>& points);
+  /// Stores a study as another store holds it (its id, version and creation time), without
+  /// its points: the template each task of a job array copies into its shard store.
+  void copy_study(const StudyRecord& study);
+  /// Adds points (pending) to a stored study: a shard's own points.
+  void add_points(std::int64_t study_id, const std::vector<NewStudyPoint>& points);
   std::optional<StudyRecord> find_study(std::string_view name);
   std::optional<StudyRecord> study(std::int64_t study_id);
+  /// Every stored study, by id (a shard store holds one).
+  std::vector<StudyRecord> studies();
   std::vector<StudySummary> list_studies();
   std::optional<StudySummary> summary(std::int64_t study_id);
   std::vector<StudyPointState> points(std::int64_t study_id);
@@ -103,9 +137,21 @@ class StudyStore {
   bool abandon_point(std::int64_t study_id, int point, const ProcessLease& lease, PointStatus status,
                      const std::string& message);
 
+  /// Records a submitted job array and the point each of its tasks runs, all or nothing.
+  void record_job(std::int64_t study_id, const StudyJob& job, const std::vector<std::pair<std::int64_t, int>>& tasks);
+  std::vector<StudyJob> jobs(std::int64_t study_id);
+  /// The study's tasks by job and task.
+  std::vector<StudyTask> tasks(std::int64_t study_id);
+  /// In a shard store: its task's row as the task starts (job, task, point, host), then
+  /// its end with the point's status.
+  void begin_task(std::int64_t study_id, const StudyTask& task);
+  void end_task(std::int64_t study_id, std::int64_t job_id, std::int64_t task, PointStatus outcome,
+                const std::string& message);
+
  private:
-  sqlite::Database& db() { return store_->database(); }
-  RunStore* store_;
+  void insert_points(std::int64_t study_id, const std::vector<NewStudyPoint>& points);
+  sqlite::Database& db() { return *db_; }
+  sqlite::Database* db_;
 };
 
 }  // namespace pdamp

@@ -1,0 +1,80 @@
+#pragma once
+/// A study as a Slurm job array: where its files go beside the store (ShardFolder), the
+/// options of its job script, and the script itself.
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pdamp::slurm {
+
+/// A study's files on the cluster, in `STORE.shards/study-ID/` beside its store:
+///   study.sqlite                  the study (no points), copied by each task into its shard
+///   submit-K.sh                   the job scripts, one per submission
+///   logs/JOB_TASK.log             each task's output (Slurm's %A_%a)
+///   task-T.job-J.sqlite           the shard store of task T (the point it runs) of job J
+///   task-T.job-J.sqlite.part      the same while it is written, or left by a killed task
+class ShardFolder {
+ public:
+  ShardFolder(const std::filesystem::path& store, std::int64_t study_id);
+  explicit ShardFolder(std::filesystem::path folder) : folder_(std::move(folder)) {}
+
+  const std::filesystem::path& path() const { return folder_; }
+  std::filesystem::path template_store() const { return folder_ / "study.sqlite"; }
+  std::filesystem::path logs() const { return folder_ / "logs"; }
+  std::filesystem::path log(std::int64_t job, std::int64_t task) const;
+  std::filesystem::path script(int submission) const;
+  std::filesystem::path shard(std::int64_t job, std::int64_t task) const;
+  std::filesystem::path unfinished(std::int64_t job, std::int64_t task) const;
+
+  /// A shard file found in the folder.
+  struct Found {
+    std::int64_t job = 0, task = 0;
+    bool finished = false;  ///< false: a .part file
+    std::filesystem::path file;
+  };
+  /// The shard files in the folder, by job and task; other files are ignored.
+  std::vector<Found> scan() const;
+  /// A shard file's job and task from its name; nothing for any other name.
+  static std::optional<Found> parse(const std::filesystem::path& file);
+
+ private:
+  std::filesystem::path folder_;
+};
+
+/// What `pdamp study submit` asks of Slurm, each checked when read.
+struct SlurmOptions {
+  std::string partition;   ///< empty: the cluster's default
+  std::string account;     ///< empty: the user's default
+  std::string time_limit;  ///< per task; empty: the partition's default
+  int max_parallel = 0;    ///< tasks run at once (%K); 0: as many as Slurm allows
+  int threads = 1;         ///< cores per task (--cpus-per-task): the soft engine's threads
+  std::string scratch;     ///< a folder on the node for the shard while it is written; empty: none
+};
+
+/// Each option's value checked; InputError naming the option and what is valid.
+std::string parse_partition(const std::string& text);
+std::string parse_account(const std::string& text);
+std::string parse_time_limit(const std::string& text);
+std::string parse_scratch(const std::string& text);
+
+/// Array indices as Slurm's --array list: "1-3,5,7-8".
+std::string array_ranges(std::vector<std::int64_t> indices);
+
+struct JobScriptRequest {
+  std::int64_t study_id = 0;
+  std::string study_name;
+  std::filesystem::path pdamp;  ///< the executable the tasks run
+  ShardFolder folder;
+  std::vector<std::int64_t> tasks;  ///< array indices: task T runs point T
+  SlurmOptions options;
+};
+
+/// The job array's script: #SBATCH lines, then the task (`pdamp study task`). Throws
+/// InputError for a path that #SBATCH lines cannot hold (white space, quotes, '%').
+std::string job_script(const JobScriptRequest& request);
+
+}  // namespace pdamp::slurm

@@ -1,0 +1,44 @@
+#pragma once
+/// Merging a shard store into its study's store (`pdamp study collect`). A shard store is
+/// the store one cluster task wrote on its own (`pdamp study task`): the study, the task's
+/// point with its runs, settled bed and metrics, and the task's own `study_tasks` row. Each
+/// shard is merged in one transaction, all of it or nothing, with new ids for its runs,
+/// comparison and beds; a bed the store holds already (the same settings) is shared.
+
+#include <filesystem>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "pdamp/store/run_store.hpp"
+#include "pdamp/store/study_store.hpp"
+
+namespace pdamp {
+
+/// What merging one shard did.
+struct ShardMerge {
+  StudyTask task;                  ///< the shard's task as it tells: job, task, point, host, times, outcome
+  bool already_collected = false;  ///< merged before: nothing added now
+  bool results_added = false;      ///< its point's runs, status and metrics were added
+  std::string not_added;           ///< why not, when the shard was not collected before
+  int runs = 0;                    ///< runs added
+  int beds_added = 0;              ///< settled beds added
+  int beds_shared = 0;             ///< settled beds the store held already, the same bits
+};
+
+/// The tables a shard's rows are merged into, and those left alone: the study's
+/// definition, which must be the store's (studies, study_point_values), and the store's own
+/// submissions (study_jobs). Every table of the schema is in one of the two (a test checks).
+std::span<const std::string_view> merged_tables();
+std::span<const std::string_view> unmerged_tables();
+
+/// Merges the shard store `shard` of `study` into `store`; a shard collected before adds
+/// nothing. A point the store has completed (or is running) keeps its results: the shard's
+/// are not added (ShardMerge::not_added says so). Throws InputError, adding nothing, for a
+/// file that is not a shard of this study: not a pdamp store, another schema version or
+/// other tables than the store's, another study, no single task of its own, a point the
+/// study does not have, or a settled bed that differs from the store's bed of the same
+/// settings.
+ShardMerge merge_shard(RunStore& store, const StudyRecord& study, const std::filesystem::path& shard);
+
+}  // namespace pdamp

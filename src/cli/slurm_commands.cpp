@@ -1,0 +1,365 @@
+#include "slurm_commands.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <fstream>
+#include <iostream>
+#include <map>
+
+#include "commands.hpp"
+#include "pdamp/slurm/collect.hpp"
+#include "pdamp/slurm/program.hpp"
+#include "pdamp/slurm/shard_task.hpp"
+#include "pdamp/study/lease.hpp"
+#include "pdamp/study/study_runner.hpp"
+#include "subcommand.hpp"
+#include "text_table.hpp"
+
+namespace po = boost::program_options;
+
+namespace pdamp {
+namespace {
+
+using namespace slurm;
+
+std::string job_name(std::int64_t study_id) { return "pdamp-study-" + std::to_string(study_id); }
+
+/// The Slurm options of `pdamp study submit`, each checked.
+SlurmOptions slurm_options(const po::variables_map& vm) {
+  SlurmOptions o;
+  if (vm.count("partition")) o.partition = parse_partition(vm["partition"].as<std::string>());
+  if (vm.count("account")) o.account = parse_account(vm["account"].as<std::string>());
+  if (vm.count("time")) o.time_limit = parse_time_limit(vm["time"].as<std::string>());
+  if (vm.count("max-parallel")) {
+    o.max_parallel = static_cast<int>(parse_whole_number(vm["max-parallel"].as<std::string>(), 1, 100'000, "--max-parallel"));
+  }
+  o.threads = static_cast<int>(parse_whole_number(vm["threads"].as<std::string>(), 1, 1024, "--threads"));
+  if (vm.count("scratch")) o.scratch = parse_scratch(vm["scratch"].as<std::string>());
+  return o;
+}
+
+/// The study's tasks as they stand, asking Slurm where its jobs may still be listed.
+std::vector<TaskView> study_tasks(StudyStore& studies, std::int64_t id, const std::vector<ShardFolder>& folders,
+                                  SlurmReport& queue, SlurmReport& accounting, bool ask_accounting) {
+  std::vector<std::int64_t> jobs;
+  for (const auto& job : studies.jobs(id)) jobs.push_back(job.job_id);
+  if (!jobs.empty()) {
+    queue = queue_states(jobs, job_name(id));
+    if (ask_accounting) accounting = accounting_states(jobs);
+  }
+  return task_views(studies, id, folders, queue, accounting);
+}
+
+/// The latest task of each point.
+std::map<int, const TaskView*> latest_tasks(const std::vector<TaskView>& tasks) {
+  std::map<int, const TaskView*> latest;
+  for (const auto& view : tasks) latest[view.task.point] = &view;  // by job, then task
+  return latest;
+}
+
+/// What is wrong with a point that is not completed, from its latest task.
+std::string point_problem(const StudyPointState& point, const TaskView* view, const ShardFolder& folder) {
+  if (!view) return "not submitted";
+  const std::string task = "task " + std::to_string(view->task.task) + " of job " + std::to_string(view->task.job_id);
+  const std::string log = " (log: " + folder.log(view->task.job_id, view->task.task).string() + ")";
+  switch (view->standing) {
+    case TaskStanding::collected:
+      return std::string(to_string(point.status)) + " in " + task + ": " + point.message + log;
+    case TaskStanding::waiting:
+      return task + " finished; its shard waits to be collected";
+    case TaskStanding::in_queue:
+      return task + " is " + view->slurm_state;
+    case TaskStanding::unfinished:
+      return task + " left an unfinished shard: it was killed while running" + log;
+    case TaskStanding::missing:
+      break;
+  }
+  return task + " left no shard" + (view->slurm_state.empty() ? "" : " (Slurm: " + view->slurm_state + ")") +
+         ": it never ran, or died before it could write one" + log;
+}
+
+/// The points that are not completed, one line each, and how many are.
+int report_points(StudyStore& studies, std::int64_t id, const std::vector<TaskView>& tasks, const ShardFolder& folder,
+                  std::ostream& out) {
+  const auto latest = latest_tasks(tasks);
+  int completed = 0;
+  for (const auto& p : studies.points(id)) {
+    if (p.status == PointStatus::completed) {
+      ++completed;
+      continue;
+    }
+    const auto it = latest.find(p.point);
+    out << "pdamp: point " << p.point << ": " << printable(point_problem(p, it == latest.end() ? nullptr : it->second, folder))
+        << "\n";
+  }
+  return completed;
+}
+
+void report_collect(const CollectReport& report, std::ostream& out) {
+  for (const auto& m : report.merged) {
+    out << "pdamp: collected task " << m.task.task << " of job " << m.task.job_id << " (point " << m.task.point
+        << ", " << printable(m.task.host) << "): "
+        << (m.task.outcome ? std::string(to_string(*m.task.outcome)) : std::string("not ended"));
+    if (m.results_added) {
+      out << ", " << m.runs << " runs, " << m.beds_added << " beds added, " << m.beds_shared << " shared";
+    } else {
+      out << "; " << printable(m.not_added);
+    }
+    out << "\n";
+  }
+  for (const auto& line : report.refused) out << "pdamp: refused: " << printable(line) << "\n";
+}
+
+/// A new job script file, numbered after those in the folder.
+std::filesystem::path new_script(const ShardFolder& folder, const std::string& text) {
+  for (int k = 1;; ++k) {
+    const auto file = folder.script(k);
+    const int fd = open(file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0755);
+    if (fd < 0 && errno == EEXIST) continue;
+    if (fd < 0) throw RuntimeFailure("cannot write the job script '" + file.string() + "': " + std::strerror(errno));
+    const bool written = write(fd, text.data(), text.size()) == static_cast<ssize_t>(text.size());
+    close(fd);
+    if (!written) throw RuntimeFailure("cannot write the job script '" + file.string() + "'");
+    return file;
+  }
+}
+
+std::filesystem::path this_executable() { return std::filesystem::read_symlink("/proc/self/exe"); }
+
+/// What a dry run would submit: the study's id (stored, or the next) and its points to run.
+std::pair<std::int64_t, std::vector<std::int64_t>> planned(const std::string& db, const study::Study& study) {
+  std::vector<std::int64_t> all;
+  for (const auto& p : study.points) all.push_back(p.point);
+  if (!std::filesystem::exists(db)) return {1, all};
+  RunStore store(db, StoreAccess::read);
+  StudyStore studies(store);
+  if (const auto record = studies.find_study(study.file.name)) {
+    const auto differences = study::study_differences(study::stored_study(*record), study);
+    if (!differences.empty()) study::find_or_create_study(store, study);  // throws, naming the differences
+    SlurmReport queue, accounting;
+    const auto folders = study_folders(studies, db, record->study_id);
+    return {record->study_id,
+            points_to_submit(studies, record->study_id, study_tasks(studies, record->study_id, folders, queue, accounting, false))};
+  }
+  sqlite::Statement next(store.database(), "SELECT coalesce(max(seq), 0) + 1 FROM sqlite_sequence WHERE name = 'studies'");
+  next.step();
+  return {next.column_int(0), all};
+}
+
+int dry_run(const std::string& db, const study::Study& study, const SlurmOptions& options) {
+  const auto [id, points] = planned(db, study);
+  if (points.empty()) {
+    std::cerr << "pdamp: dry run: study " << id << " has no point to submit\n";
+    return 0;
+  }
+  std::cout << job_script({id, study.file.name, this_executable(), ShardFolder(db, id), points, options});
+  std::cerr << "pdamp: dry run: the job script for " << points.size() << " points of study " << id
+            << "; nothing was written or submitted\n";
+  return 0;
+}
+
+int submit_points(OpenStudy& open, const std::string& db, const SlurmOptions& options) {
+  const auto folders = study_folders(open.studies, db, open.id);
+  const CollectReport collected = collect_shards(open.store, open.record, folders);
+  report_collect(collected, std::cerr);
+  if (!collected.refused.empty()) {
+    throw RuntimeFailure("the shards refused above stay in the way: move them out of the shard folder, then submit "
+                         "again; nothing was submitted");
+  }
+  SlurmReport queue, accounting;
+  const auto tasks = study_tasks(open.studies, open.id, folders, queue, accounting, false);
+  if (!open.studies.jobs(open.id).empty() && !queue.available) {
+    throw RuntimeFailure("cannot tell which of the study's tasks are still queued (" + queue.problem +
+                         "); nothing was submitted");
+  }
+  const auto points = points_to_submit(open.studies, open.id, tasks);
+  if (points.empty()) {
+    std::cerr << "pdamp: study " << open.id << " has no point to submit: every point is completed or queued ('pdamp "
+              << "study status " << open.id << "')\n";
+    return 0;
+  }
+  const ShardFolder folder(db, open.id);
+  std::filesystem::create_directories(folder.logs());
+  write_folder_study(folder, open.record);
+  const std::string text = job_script({open.id, open.record.name, this_executable(), folder, points, options});
+  const auto script = new_script(folder, text);
+  std::int64_t job = 0;
+  try {
+    job = submit(script);
+  } catch (...) {
+    std::filesystem::remove(script);
+    throw;
+  }
+  std::vector<std::pair<std::int64_t, int>> tasks_of_job;
+  for (const auto point : points) tasks_of_job.emplace_back(point, static_cast<int>(point));
+  open.studies.record_job(open.id, {job, "", script.string(), folder.path().string()}, tasks_of_job);
+  std::cout << "study " << open.id << " '" << printable(open.record.name) << "': " << points.size()
+            << " points submitted as job " << job << " (array " << array_ranges(points) << ")\n"
+            << "  job script     " << printable(script.string()) << "\n"
+            << "  shard stores   " << printable(folder.path().string()) << "\n"
+            << "then: pdamp study status " << open.id << ", pdamp study collect " << open.id << "\n";
+  return 0;
+}
+
+void add_submit_options(Subcommand& command) {
+  command.add_options()("slurm", "submit to Slurm (sbatch), the scheduler pdamp submits to")(
+      "resume", po::value<std::string>(), "STUDY_ID: submit the stored study's points that are missing or failed")(
+      "partition", po::value<std::string>(), "the partition (default: the cluster's)")(
+      "account", po::value<std::string>(), "the account charged (default: yours)")(
+      "time", po::value<std::string>(), "the time limit of each task, e.g. 30 or 2:00:00 (default: the partition's)")(
+      "max-parallel", po::value<std::string>(), "tasks running at once (the array's %K; default: Slurm's limit)")(
+      "threads", po::value<std::string>()->default_value("1"),
+      "cores per task (--cpus-per-task), the soft engine's threads; results are the same bits for any number")(
+      "scratch", po::value<std::string>(),
+      "a folder on the compute node to write each shard in, copied to the shard folder at the end, e.g. '$TMPDIR' "
+      "(default: written in the shard folder)")(
+      "force", "submit a study of more than 1000 points")(
+      "dry-run", "print the job script; write and submit nothing");
+}
+
+/// `pdamp study task`'s progress in its log: a line each tenth of the point.
+std::function<void(double, std::string_view)> progress_lines(int point) {
+  return [point, last = -1](double fraction, std::string_view phase) mutable {
+    const int tenth = static_cast<int>(fraction * 10.0);
+    if (tenth == last) return;
+    last = tenth;
+    std::cout << "pdamp: point " << point << ": " << phase << " " << 10 * tenth << " %" << std::endl;
+  };
+}
+
+}  // namespace
+
+int study_submit(const std::vector<std::string>& args) {
+  Subcommand command(
+      "pdamp study submit STUDY.ini --slurm [options]\n  pdamp study submit --resume STUDY_ID --slurm [options]",
+      {"STUDY.ini"});
+  add_submit_options(command);
+  if (!command.parse(args)) return 0;
+  const auto& vm = command.vm();
+  if (!vm.count("slurm")) throw InputError("pdamp study submit: --slurm is required (the scheduler to submit to)");
+  if (vm.count("resume") == vm.count("STUDY.ini")) {
+    throw InputError("pdamp study submit: give a STUDY.ini or --resume STUDY_ID (one of the two)");
+  }
+  const SlurmOptions options = slurm_options(vm);
+  const std::string db = vm["db"].as<std::string>();
+  if (vm.count("resume")) {
+    OpenStudy open(vm["resume"].as<std::string>(), db, vm.count("dry-run") ? StoreAccess::read : StoreAccess::modify);
+    if (vm.count("dry-run")) return dry_run(db, open.study, options);
+    check_study_files(open);
+    return submit_points(open, db, options);
+  }
+  // Everything that can be wrong with the study is found before the store is touched.
+  study::Study study =
+      study::make_study(study::read_study_source(vm["STUDY.ini"].as<std::string>()), vm.count("force") > 0);
+  study::validate_study(study);
+  if (vm.count("dry-run")) return dry_run(db, study, options);
+  if (!find_program("sbatch")) {
+    throw RuntimeFailure("sbatch is not installed here: submit from a machine of the Slurm cluster (a login node); "
+                         "nothing was written");
+  }
+  std::int64_t id = 0;
+  {
+    RunStore store(db);
+    id = study::find_or_create_study(store, study);
+  }
+  OpenStudy open(std::to_string(id), db, StoreAccess::modify);
+  return submit_points(open, db, options);
+}
+
+int study_collect(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study collect STUDY_ID [--db FILE]", {"STUDY_ID"});
+  if (!command.parse(args)) return 0;
+  const std::string db = command.vm()["db"].as<std::string>();
+  OpenStudy open(command.vm(), "study collect", StoreAccess::modify);
+  const auto folders = study_folders(open.studies, db, open.id);
+  const CollectReport report = collect_shards(open.store, open.record, folders);
+  report_collect(report, std::cout);
+  SlurmReport queue, accounting;
+  const auto tasks = study_tasks(open.studies, open.id, folders, queue, accounting, false);
+  const int completed = report_points(open.studies, open.id, tasks, ShardFolder(db, open.id), std::cout);
+  std::cout << "study " << open.id << " '" << printable(open.record.name) << "': " << completed << " of "
+            << open.study.points.size() << " points completed; " << report.merged.size() << " shards collected now, "
+            << report.already_collected << " before" << (report.refused.empty() ? "" : ", ")
+            << (report.refused.empty() ? "" : std::to_string(report.refused.size()) + " refused") << "\n";
+  if (!queue.available && !open.studies.jobs(open.id).empty()) {
+    std::cout << "pdamp: the queue was not asked (" << printable(queue.problem) << ")\n";
+  }
+  return report.refused.empty() ? 0 : 1;
+}
+
+int study_status(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study status STUDY_ID [--db FILE]", {"STUDY_ID"});
+  if (!command.parse(args)) return 0;
+  const std::string db = command.vm()["db"].as<std::string>();
+  OpenStudy open(command.vm(), "study status", StoreAccess::read);
+  const auto folders = study_folders(open.studies, db, open.id);
+  SlurmReport queue, accounting;
+  const auto tasks = study_tasks(open.studies, open.id, folders, queue, accounting, true);
+  const auto latest = latest_tasks(tasks);
+  TextTable table({{"point", true}, {"status"}, {"job_task"}, {"slurm"}, {"shard"}, {"message", false, 80}});
+  for (const auto& p : open.studies.points(open.id)) {
+    const auto it = latest.find(p.point);
+    const TaskView* view = it == latest.end() ? nullptr : it->second;
+    table.add_row({std::to_string(p.point), std::string(to_string(p.status)),
+                   view ? std::to_string(view->task.job_id) + "_" + std::to_string(view->task.task) : "-",
+                   view && !view->slurm_state.empty() ? view->slurm_state : "-",
+                   view ? std::string(to_string(view->standing)) : "-",
+                   p.status == PointStatus::completed ? "" : point_problem(p, view, ShardFolder(db, open.id))});
+  }
+  const auto summary = open.studies.summary(open.id);
+  std::cout << "study " << open.id << " '" << printable(open.record.name) << "': " << summary->completed << " of "
+            << summary->n_points << " points completed, " << open.studies.jobs(open.id).size() << " jobs submitted\n";
+  table.print(std::cout);
+  if (!open.studies.jobs(open.id).empty()) {
+    if (!queue.available) std::cout << printable(queue.problem) << "; queue states unknown\n";
+    if (!accounting.available) {
+      std::cout << printable(accounting.problem)
+                << "; tasks that left the queue are known from their shards only\n";
+    }
+  }
+  return 0;
+}
+
+int study_task(const std::vector<std::string>& args) {
+  Subcommand command("pdamp study task SHARD_FOLDER --job J --task T [options]", {"SHARD_FOLDER"});
+  command.add_options()("job", po::value<std::string>(), "the job array's id (SLURM_ARRAY_JOB_ID)")(
+      "task", po::value<std::string>(), "the task's index in it (SLURM_ARRAY_TASK_ID): the point it runs")(
+      "threads", po::value<std::string>(), "soft-engine threads")(
+      "scratch", po::value<std::string>(), "a folder to write the shard in first (node-local scratch)");
+  if (!command.parse(args)) return 0;
+  const auto& vm = command.vm();
+  constexpr long largest = std::numeric_limits<std::int64_t>::max();
+  ShardTaskRequest request{ShardFolder(std::filesystem::path(required_option(vm, "SHARD_FOLDER", "study task"))),
+                           parse_whole_number(required_option(vm, "job", "study task"), 1, largest, "--job"),
+                           parse_whole_number(required_option(vm, "task", "study task"), 0, largest, "--task"),
+                           vm.count("scratch") ? vm["scratch"].as<std::string>() : std::string()};
+  if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
+  install_stop_handlers();
+  study::PointRunControl control;
+  control.stop = stop_flag();
+  control.warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
+  control.progress = progress_lines(static_cast<int>(request.task));
+  std::cout << "pdamp: task " << request.task << " of job " << request.job << " on "
+            << printable(study::this_process_lease().host) << ", shard folder "
+            << printable(request.folder.path().string()) << std::endl;
+  const ShardTaskResult result = run_shard_task(request, control);
+  std::cout << "pdamp: point " << request.task << " of study " << result.study_id << " "
+            << to_string(result.point.status) << (result.point.message.empty() ? "" : ": " + result.point.message)
+            << "; shard " << printable(result.shard.string()) << std::endl;
+  switch (result.point.status) {
+    case PointStatus::completed:
+      return 0;
+    case PointStatus::interrupted:
+      return 128 + stop_signal_received();
+    default:
+      return 1;
+  }
+}
+
+}  // namespace pdamp

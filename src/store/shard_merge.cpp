@@ -1,0 +1,376 @@
+#include "pdamp/store/shard_merge.hpp"
+
+#include <array>
+#include <map>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "pdamp/errors.hpp"
+#include "store_file.hpp"
+
+namespace pdamp {
+namespace {
+
+/// The tables of a run's own rows, keyed by run_id and copied as they are.
+constexpr std::array<std::string_view, 4> run_tables{"samples", "cycles", "run_statistics", "calibrations"};
+
+constexpr std::array<std::string_view, 14> merged{
+    "initial_states", "initial_particles",   "runs",              "samples",
+    "cycles",         "run_statistics",      "calibrations",      "comparisons",
+    "comparison_psi_bins", "comparison_energy", "study_point_runs", "study_point_metrics",
+    "study_points",   "study_tasks"};
+constexpr std::array<std::string_view, 4> unmerged{"studies", "study_point_values", "study_jobs", "sqlite_sequence"};
+
+/// A shard's ids and their new ids in the store.
+using IdMap = std::map<std::int64_t, std::int64_t>;
+
+std::string quoted(const std::filesystem::path& file) { return "'" + file.string() + "'"; }
+
+std::int64_t integer(sqlite::Database& db, const std::string& sql) {
+  sqlite::Statement q(db, sql);
+  q.step();
+  return q.column_int(0);
+}
+
+/// Copies rows of one table from the shard into the store, column for column, bit for bit:
+/// the rows whose `key` column has a value, with the columns in `remap` mapped to the
+/// store's ids. With `own_id`, that column is left for the store to number, and the map
+/// from the shard's ids to the store's is filled.
+class RowCopier {
+ public:
+  RowCopier(sqlite::Database& shard, sqlite::Database& store, std::string_view table, std::string_view key,
+            std::map<std::string, const IdMap*> remap, std::string_view own_id = {})
+      : store_(&store), table_(table), remap_(std::move(remap)) {
+    std::string names, slots;
+    sqlite::Statement columns(store, "SELECT name FROM pragma_table_info(?) ORDER BY cid");
+    columns.bind(1, table);
+    while (columns.step()) {
+      const std::string name = columns.column_text(0);
+      if (name == own_id) continue;
+      names += (names.empty() ? "" : ", ") + name;
+      slots += slots.empty() ? "?" : ", ?";
+      columns_.push_back(name);
+    }
+    select_ = std::make_unique<sqlite::Statement>(
+        shard, "SELECT " + (own_id.empty() ? std::string("NULL") : std::string(own_id)) + ", " + names + " FROM " +
+                   std::string(table) + " WHERE " + std::string(key) + " = ?");
+    insert_ = std::make_unique<sqlite::Statement>(
+        store, "INSERT INTO " + std::string(table) + " (" + names + ") VALUES (" + slots + ")");
+  }
+
+  /// Copies the rows whose key is `key_value`; returns how many.
+  int copy(std::int64_t key_value, IdMap* own_ids = nullptr) {
+    select_->bind(1, key_value);
+    int rows = 0;
+    while (select_->step()) {
+      for (std::size_t c = 0; c < columns_.size(); ++c) bind(static_cast<int>(c));
+      insert_->run();
+      if (own_ids) (*own_ids)[select_->column_int(0)] = store_->last_insert_rowid();
+      ++rows;
+    }
+    select_->reset();
+    return rows;
+  }
+
+ private:
+  void bind(int c) {
+    const int column = c + 1;  // after the own id
+    const auto it = remap_.find(columns_[static_cast<std::size_t>(c)]);
+    if (it == remap_.end() || select_->is_null(column)) {
+      insert_->bind_column(c + 1, *select_, column);
+      return;
+    }
+    const auto id = it->second->find(select_->column_int(column));
+    if (id == it->second->end()) {
+      throw RuntimeFailure("a row of " + table_ + " refers to " + it->first + " " +
+                           std::to_string(select_->column_int(column)) + ", which was not merged");
+    }
+    insert_->bind(c + 1, id->second);
+  }
+
+  sqlite::Database* store_;
+  std::string table_;
+  std::map<std::string, const IdMap*> remap_;
+  std::vector<std::string> columns_;
+  std::unique_ptr<sqlite::Statement> select_, insert_;
+};
+
+/// The shard file, opened read-only without locks (nobody writes a finished shard, and
+/// cluster file systems lock unreliably), checked to be a store of the store's schema.
+class Shard {
+ public:
+  Shard(const std::filesystem::path& file, sqlite::Database& store) : file_(file) {
+    try {
+      db_ = std::make_unique<sqlite::Database>(file, sqlite::Access::snapshot);
+      check_schema(store);
+    } catch (const sqlite::Damaged& e) {
+      throw InputError("shard " + quoted(file) + " is not a pdamp store or is damaged: " + e.what());
+    }
+  }
+  sqlite::Database& db() { return *db_; }
+  const std::filesystem::path& file() const { return file_; }
+
+  /// The shard's study, which must be `study`.
+  void check_study(const StudyRecord& study) {
+    const auto studies = StudyStore(*db_).studies();
+    if (studies.size() != 1) {
+      throw InputError("shard " + quoted(file_) + " holds " + std::to_string(studies.size()) +
+                       " studies, not one: it was not written by 'pdamp study task'");
+    }
+    const StudyRecord& s = studies.front();
+    if (s.study_id != study.study_id || s.name != study.name || s.models != study.models ||
+        s.study_text != study.study_text || s.scenario_text != study.scenario_text || s.created_at != study.created_at) {
+      throw InputError("shard " + quoted(file_) + " belongs to study " + std::to_string(s.study_id) + " '" + s.name +
+                       "' created " + s.created_at + ", not to study " + std::to_string(study.study_id) + " '" +
+                       study.name + "' created " + study.created_at + "; nothing was added from it");
+    }
+  }
+
+  /// The shard's own task.
+  StudyTask task(std::int64_t study_id) {
+    auto tasks = StudyStore(*db_).tasks(study_id);
+    if (tasks.size() != 1) {
+      throw InputError("shard " + quoted(file_) + " holds " + std::to_string(tasks.size()) +
+                       " task records, not one: it was not written by 'pdamp study task'");
+    }
+    return tasks.front();
+  }
+
+ private:
+  void check_schema(sqlite::Database& store) {
+    if (integer(*db_, "PRAGMA application_id") != store_file::pdamp_application_id) {
+      throw InputError("shard " + quoted(file_) + " is not a pdamp store");
+    }
+    const std::int64_t version = integer(*db_, "PRAGMA user_version");
+    if (version != RunStore::schema_version()) {
+      throw InputError("shard " + quoted(file_) + " has schema version " + std::to_string(version) +
+                       ", the store " + std::to_string(RunStore::schema_version()) +
+                       ": it was written by another version of pdamp; collect it with the pdamp that ran the task");
+    }
+    const std::string schema = "SELECT group_concat(type || ' ' || name || ' ' || coalesce(sql, ''), char(10)) FROM "
+                               "(SELECT * FROM sqlite_schema ORDER BY type, name)";
+    sqlite::Statement ours(store, schema), theirs(*db_, schema);
+    ours.step();
+    theirs.step();
+    if (!ours.same_value(0, theirs, 0)) {
+      throw InputError("shard " + quoted(file_) + " has schema version " + std::to_string(version) +
+                       " but other tables than the store's: it was written by another build of pdamp");
+    }
+    if (sqlite::Statement check(*db_, "PRAGMA quick_check(1)"); check.step() && check.column_text(0) != "ok") {
+      throw InputError("shard " + quoted(file_) + " is damaged (SQLite's quick_check: " + check.column_text(0) + ")");
+    }
+  }
+
+  std::filesystem::path file_;
+  std::unique_ptr<sqlite::Database> db_;
+};
+
+/// One shard's merge, inside the store's write transaction.
+class Merger {
+ public:
+  Merger(Shard& shard, sqlite::Database& store, std::int64_t study_id, ShardMerge& result)
+      : shard_(&shard), store_(&store), study_id_(study_id), result_(&result) {}
+
+  void run() {
+    const StudyTask& task = result_->task;
+    sqlite::Statement collected(*store_,
+                                "SELECT collected_at IS NOT NULL FROM study_tasks "
+                                "WHERE study_id = ? AND job_id = ? AND task = ?");
+    collected.bind(1, study_id_).bind(2, task.job_id).bind(3, task.task);
+    if (collected.step() && collected.column_int(0) != 0) {
+      result_->already_collected = true;
+      return;
+    }
+    const auto ours = StudyStore(*store_).point(study_id_, task.point);
+    const auto theirs = StudyStore(shard_->db()).point(study_id_, task.point);
+    if (!ours || !theirs) {
+      throw InputError("shard " + quoted(shard_->file()) + ": its point " + std::to_string(task.point) +
+                       " is not a point of study " + std::to_string(study_id_) + " in both stores");
+    }
+    const std::string point = "point " + std::to_string(task.point);
+    if (theirs->status == PointStatus::pending || theirs->status == PointStatus::running) {
+      result_->not_added = point + " did not end in its task";
+    } else if (ours->status == PointStatus::completed) {
+      result_->not_added = point + " was completed already; the shard's results for it are not added";
+    } else if (ours->status == PointStatus::running) {
+      result_->not_added = point + " is running in " +
+                           (ours->lease ? "process " + std::to_string(ours->lease->pid) + " on " + ours->lease->host
+                                        : std::string("another process")) +
+                           "; the shard's results for it are not added";
+    } else {
+      add_results(ours->attempt, theirs->attempt);
+      result_->results_added = true;
+    }
+    record_task();
+  }
+
+ private:
+  /// The point's runs (every attempt's), their beds, comparison and metrics, numbered
+  /// after the store's attempts, and the point's status.
+  void add_results(int attempts_before, int shard_attempts) {
+    const int point = result_->task.point;
+    IdMap attempts;
+    for (int a = 1; a <= shard_attempts; ++a) attempts[a] = attempts_before + a;
+    std::vector<std::int64_t> runs;
+    sqlite::Statement links(shard_->db(), "SELECT run_id FROM study_point_runs WHERE point = ? ORDER BY run_id");
+    links.bind(1, point);
+    while (links.step()) runs.push_back(links.column_int(0));
+    sqlite::Statement comparison(shard_->db(), "SELECT comparison_id FROM study_points WHERE point = ?");
+    comparison.bind(1, point);
+    comparison.step();
+    const std::optional<std::int64_t> comparison_id =
+        comparison.is_null(0) ? std::nullopt : std::optional(comparison.column_int(0));
+
+    add_beds(runs, comparison_id);
+    RowCopier run_rows(shard_->db(), *store_, "runs", "run_id", {{"initial_state_id", &beds_}}, "run_id");
+    for (const std::int64_t run : runs) run_rows.copy(run, &runs_);
+    for (const std::string_view table : run_tables) {
+      RowCopier rows(shard_->db(), *store_, table, "run_id", {{"run_id", &runs_}});
+      for (const std::int64_t run : runs) rows.copy(run);
+    }
+    IdMap comparisons;
+    if (comparison_id) {
+      RowCopier(shard_->db(), *store_, "comparisons", "comparison_id",
+                {{"soft_run_id", &runs_}, {"hard_run_id", &runs_}, {"initial_state_id", &beds_}}, "comparison_id")
+          .copy(*comparison_id, &comparisons);
+      for (const std::string_view table : {"comparison_psi_bins", "comparison_energy"}) {
+        RowCopier(shard_->db(), *store_, table, "comparison_id", {{"comparison_id", &comparisons}})
+            .copy(*comparison_id);
+      }
+    }
+    RowCopier(shard_->db(), *store_, "study_point_runs", "point", {{"run_id", &runs_}, {"attempt", &attempts}})
+        .copy(point);
+    sqlite::Statement stale(*store_, "DELETE FROM study_point_metrics WHERE study_id = ? AND point = ?");
+    stale.bind(1, study_id_).bind(2, point).run();
+    RowCopier(shard_->db(), *store_, "study_point_metrics", "point", {{"run_id", &runs_}}).copy(point);
+    update_point(attempts_before, comparison_id ? std::optional(comparisons.at(*comparison_id)) : std::nullopt);
+    result_->runs = static_cast<int>(runs.size());
+  }
+
+  /// The beds the runs and the comparison started from: the store's bed of the same
+  /// settings if it has one (which must be the same bits), else a copy.
+  void add_beds(const std::vector<std::int64_t>& runs, std::optional<std::int64_t> comparison_id) {
+    std::vector<std::int64_t> states;
+    sqlite::Statement run_bed(shard_->db(), "SELECT initial_state_id FROM runs WHERE run_id = ?");
+    for (const std::int64_t run : runs) {
+      run_bed.bind(1, run);
+      if (run_bed.step() && !run_bed.is_null(0)) states.push_back(run_bed.column_int(0));
+      run_bed.reset();
+    }
+    if (comparison_id) {
+      sqlite::Statement bed(shard_->db(), "SELECT initial_state_id FROM comparisons WHERE comparison_id = ?");
+      bed.bind(1, *comparison_id);
+      if (bed.step() && !bed.is_null(0)) states.push_back(bed.column_int(0));
+    }
+    RowCopier state_rows(shard_->db(), *store_, "initial_states", "state_id", {}, "state_id");
+    RowCopier particle_rows(shard_->db(), *store_, "initial_particles", "state_id", {{"state_id", &beds_}});
+    sqlite::Statement key(shard_->db(), "SELECT settle_key FROM initial_states WHERE state_id = ?");
+    sqlite::Statement existing(*store_, "SELECT state_id FROM initial_states WHERE settle_key = ?");
+    for (const std::int64_t state : states) {
+      if (beds_.contains(state)) continue;
+      key.bind(1, state);
+      if (!key.step()) throw RuntimeFailure("shard " + quoted(shard_->file()) + " lacks its bed " + std::to_string(state));
+      existing.bind(1, key.column_text(0));
+      if (existing.step()) {
+        check_same_bed(state, existing.column_int(0));
+        beds_[state] = existing.column_int(0);
+        ++result_->beds_shared;
+      } else {
+        state_rows.copy(state, &beds_);
+        particle_rows.copy(state);
+        ++result_->beds_added;
+      }
+      key.reset();
+      existing.reset();
+    }
+  }
+
+  /// A bed settled from the same settings in the shard and in the store must be the same
+  /// bits (settling is deterministic); runs from it would otherwise be filed under a bed
+  /// they did not start from.
+  void check_same_bed(std::int64_t shard_state, std::int64_t store_state) {
+    // The bed's own columns, then every sphere's but the bed's id.
+    const std::pair<const char*, int> parts[] = {
+        {"SELECT n_particles, settle_time_s, kinetic_J FROM initial_states WHERE state_id = ?", 0},
+        {"SELECT * FROM initial_particles WHERE state_id = ? ORDER BY particle", 1}};
+    for (const auto& [sql, first_column] : parts) {
+      sqlite::Statement a(shard_->db(), sql), b(*store_, sql);
+      a.bind(1, shard_state);
+      b.bind(1, store_state);
+      for (;;) {
+        const bool more_a = a.step(), more_b = b.step();
+        if (!more_a && !more_b) break;
+        bool same = more_a == more_b;
+        for (int c = first_column; same && c < a.column_count(); ++c) same = a.same_value(c, b, c);
+        if (!same) {
+          throw InputError("shard " + quoted(shard_->file()) + ": its settled bed differs from the store's bed " +
+                           std::to_string(store_state) +
+                           " of the same settings (settling is deterministic: the two were settled by different "
+                           "builds of pdamp); nothing was added from it");
+        }
+      }
+    }
+  }
+
+  void update_point(int attempts_before, std::optional<std::int64_t> comparison_id) {
+    sqlite::Statement theirs(shard_->db(),
+                             "SELECT status, attempt, message, started_at, ended_at FROM study_points WHERE point = ?");
+    theirs.bind(1, result_->task.point);
+    theirs.step();
+    sqlite::Statement update(*store_,
+                             "UPDATE study_points SET status = ?, attempt = ?, message = ?, started_at = ?, "
+                             "ended_at = ?, comparison_id = ?, lease_host = NULL, lease_pid = NULL, lease_start = NULL "
+                             "WHERE study_id = ? AND point = ?");
+    update.bind_column(1, theirs, 0).bind(2, attempts_before + static_cast<int>(theirs.column_int(1)));
+    update.bind_column(3, theirs, 2).bind_column(4, theirs, 3).bind_column(5, theirs, 4);
+    update.bind(6, comparison_id).bind(7, study_id_).bind(8, result_->task.point).run();
+  }
+
+  /// The task's row as the shard tells, marked collected.
+  void record_task() {
+    const StudyTask& t = result_->task;
+    sqlite::Statement upsert(
+        *store_,
+        "INSERT INTO study_tasks (study_id, job_id, task, point, host, started_at, ended_at, outcome, message, "
+        "shard_file, collected_at) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, "
+        "strftime('%Y-%m-%dT%H:%M:%fZ', 'now')) ON CONFLICT (study_id, job_id, task) DO UPDATE SET "
+        "host = ?5, started_at = ?6, ended_at = ?7, outcome = ?8, message = ?9, shard_file = ?10, "
+        "collected_at = strftime('%Y-%m-%dT%H:%M:%fZ', 'now')");
+    upsert.bind(1, study_id_).bind(2, t.job_id).bind(3, t.task).bind(4, t.point).bind(5, t.host);
+    upsert.bind(6, t.started_at).bind(7, t.ended_at);
+    if (t.outcome) {
+      upsert.bind(8, to_string(*t.outcome));
+    } else {
+      upsert.bind_null(8);
+    }
+    upsert.bind(9, result_->not_added.empty() ? t.message : t.message + (t.message.empty() ? "" : "; ") + result_->not_added);
+    upsert.bind(10, std::filesystem::absolute(shard_->file()).string()).run();
+  }
+
+  Shard* shard_;
+  sqlite::Database* store_;
+  std::int64_t study_id_;
+  ShardMerge* result_;
+  IdMap beds_, runs_;
+};
+
+}  // namespace
+
+std::span<const std::string_view> merged_tables() { return merged; }
+std::span<const std::string_view> unmerged_tables() { return unmerged; }
+
+ShardMerge merge_shard(RunStore& store, const StudyRecord& study, const std::filesystem::path& file) {
+  Shard shard(file, store.database());
+  shard.check_study(study);
+  const StudyTask task = shard.task(study.study_id);
+  ShardMerge result;
+  sqlite::write_transaction(store.database(), [&] {
+    result = ShardMerge();  // afresh on a retry
+    result.task = task;
+    Merger(shard, store.database(), study.study_id, result).run();
+  });
+  return result;
+}
+
+}  // namespace pdamp

@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "pdamp/store/run_store.hpp"
+#include "study_compare.hpp"
 #include "test_process.hpp"
 #include "test_support.hpp"
 
@@ -28,51 +29,6 @@ std::string small() { return test::scenario_file("small").string(); }
 /// A study file on small.ini.
 std::string study_text(const std::string& models, const std::string& sweep) {
   return "[study]\nscenario = " + small() + "\nmodels = " + models + "\n\n[sweep]\n" + sweep;
-}
-
-/// The runs of each point's latest attempt in store `alias`, by point and model.
-std::string latest_runs(const std::string& alias) {
-  return "(SELECT l.point, l.model, l.run_id FROM " + alias + ".study_point_runs l JOIN " + alias +
-         ".study_points p ON p.study_id = l.study_id AND p.point = l.point AND p.attempt = l.attempt)";
-}
-
-/// How many samples of the latest attempts' runs differ between two stores of one study
-/// (bit for bit, in every column, or missing from either), and how many there are.
-std::pair<std::int64_t, std::int64_t> sample_differences(const std::filesystem::path& a,
-                                                         const std::filesystem::path& b) {
-  sqlite::Database d(a);
-  d.exec("ATTACH '" + b.string() + "' AS b");
-  std::string differs = "y.run_id IS NULL";
-  for (const char* column : {"host_z_m", "host_v_m_s", "particle_translational_J", "particle_rotational_J",
-                             "host_kinetic_J", "spring_potential_J", "gravitational_potential_J", "contact_elastic_J",
-                             "excitation_work_J", "dissipated_impact_J", "dissipated_friction_J",
-                             "dissipated_viscous_J", "energy_balance_rel_err", "contacts", "events", "steps"}) {
-    differs += std::string(" OR x.") + column + " IS NOT y." + column;
-  }
-  sqlite::Statement q(d, "SELECT sum(" + differs + "), count(*), (SELECT count(*) FROM " + latest_runs("b") +
-                             " rb JOIN b.samples USING (run_id)) FROM " + latest_runs("main") + " ra JOIN " +
-                             latest_runs("b") +
-                             " rb USING (point, model) JOIN main.samples x ON x.run_id = ra.run_id "
-                             "LEFT JOIN b.samples y ON y.run_id = rb.run_id AND y.t_s = x.t_s");
-  q.step();
-  const std::int64_t missing_in_a = q.column_int(2) - q.column_int(1);
-  return {q.column_int(0) + missing_in_a, q.column_int(1)};
-}
-
-/// How many point metrics differ between two stores of one study (all but the wall time).
-std::int64_t metric_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
-  sqlite::Database d(a);
-  d.exec("ATTACH '" + b.string() + "' AS b");
-  std::string differs = "y.point IS NULL";
-  for (const char* column : {"dissipated_impact_J", "dissipated_friction_J", "dissipated_viscous_J", "psi_peak",
-                             "psi_peak_gamma", "final_amplitude_m", "cycles", "energy_balance_rel_err"}) {
-    differs += std::string(" OR x.") + column + " IS NOT y." + column;
-  }
-  sqlite::Statement q(d, "SELECT sum(" + differs +
-                             ") + abs(count(*) - (SELECT count(*) FROM b.study_point_metrics)) "
-                             "FROM main.study_point_metrics x LEFT JOIN b.study_point_metrics y USING (point, model)");
-  q.step();
-  return q.column_int(0);
 }
 
 /// Waits (up to a minute) until the store says `sql` is true.

@@ -7,8 +7,8 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 
@@ -37,7 +37,8 @@ SlurmOptions slurm_options(const po::variables_map& vm) {
   if (vm.count("account")) o.account = parse_account(vm["account"].as<std::string>());
   if (vm.count("time")) o.time_limit = parse_time_limit(vm["time"].as<std::string>());
   if (vm.count("max-parallel")) {
-    o.max_parallel = static_cast<int>(parse_whole_number(vm["max-parallel"].as<std::string>(), 1, 100'000, "--max-parallel"));
+    o.max_parallel =
+        static_cast<int>(parse_whole_number(vm["max-parallel"].as<std::string>(), 1, 100'000, "--max-parallel"));
   }
   o.threads = static_cast<int>(parse_whole_number(vm["threads"].as<std::string>(), 1, 1024, "--threads"));
   if (vm.count("scratch")) o.scratch = parse_scratch(vm["scratch"].as<std::string>());
@@ -95,17 +96,17 @@ int report_points(StudyStore& studies, std::int64_t id, const std::vector<TaskVi
       continue;
     }
     const auto it = latest.find(p.point);
-    out << "pdamp: point " << p.point << ": " << printable(point_problem(p, it == latest.end() ? nullptr : it->second, folder))
-        << "\n";
+    out << "pdamp: point " << p.point << ": "
+        << printable(point_problem(p, it == latest.end() ? nullptr : it->second, folder)) << "\n";
   }
   return completed;
 }
 
 void report_collect(const CollectReport& report, std::ostream& out) {
   for (const auto& m : report.merged) {
-    out << "pdamp: collected task " << m.task.task << " of job " << m.task.job_id << " (point " << m.task.point
-        << ", " << printable(m.task.host) << "): "
-        << (m.task.outcome ? std::string(to_string(*m.task.outcome)) : std::string("not ended"));
+    out << "pdamp: collected task " << m.task.task << " of job " << m.task.job_id << " (point " << m.task.point << ", "
+        << printable(m.task.host)
+        << "): " << (m.task.outcome ? std::string(to_string(*m.task.outcome)) : std::string("not ended"));
     if (m.results_added) {
       out << ", " << m.runs << " runs, " << m.beds_added << " beds added, " << m.beds_shared << " shared";
     } else {
@@ -145,9 +146,11 @@ std::pair<std::int64_t, std::vector<std::int64_t>> planned(const std::string& db
     SlurmReport queue, accounting;
     const auto folders = study_folders(studies, db, record->study_id);
     return {record->study_id,
-            points_to_submit(studies, record->study_id, study_tasks(studies, record->study_id, folders, queue, accounting, false))};
+            points_to_submit(studies, record->study_id,
+                             study_tasks(studies, record->study_id, folders, queue, accounting, false))};
   }
-  sqlite::Statement next(store.database(), "SELECT coalesce(max(seq), 0) + 1 FROM sqlite_sequence WHERE name = 'studies'");
+  sqlite::Statement next(store.database(),
+                         "SELECT coalesce(max(seq), 0) + 1 FROM sqlite_sequence WHERE name = 'studies'");
   next.step();
   return {next.column_int(0), all};
 }
@@ -169,8 +172,9 @@ int submit_points(OpenStudy& open, const std::string& db, const SlurmOptions& op
   const CollectReport collected = collect_shards(open.store, open.record, folders);
   report_collect(collected, std::cerr);
   if (!collected.refused.empty()) {
-    throw RuntimeFailure("the shards refused above stay in the way: move them out of the shard folder, then submit "
-                         "again; nothing was submitted");
+    throw RuntimeFailure(
+        "the shards refused above stay in the way: move them out of the shard folder, then submit "
+        "again; nothing was submitted");
   }
   SlurmReport queue, accounting;
   const auto tasks = study_tasks(open.studies, open.id, folders, queue, accounting, false);
@@ -218,8 +222,7 @@ void add_submit_options(Subcommand& command) {
       "cores per task (--cpus-per-task), the soft engine's threads; results are the same bits for any number")(
       "scratch", po::value<std::string>(),
       "a folder on the compute node to write each shard in, copied to the shard folder at the end, e.g. '$TMPDIR' "
-      "(default: written in the shard folder)")(
-      "force", "submit a study of more than 1000 points")(
+      "(default: written in the shard folder)")("force", "submit a study of more than 1000 points")(
       "dry-run", "print the job script; write and submit nothing");
 }
 
@@ -260,8 +263,9 @@ int study_submit(const std::vector<std::string>& args) {
   study::validate_study(study);
   if (vm.count("dry-run")) return dry_run(db, study, options);
   if (!find_program("sbatch")) {
-    throw RuntimeFailure("sbatch is not installed here: submit from a machine of the Slurm cluster (a login node); "
-                         "nothing was written");
+    throw RuntimeFailure(
+        "sbatch is not installed here: submit from a machine of the Slurm cluster (a login node); "
+        "nothing was written");
   }
   std::int64_t id = 0;
   {
@@ -319,8 +323,7 @@ int study_status(const std::vector<std::string>& args) {
   if (!open.studies.jobs(open.id).empty()) {
     if (!queue.available) std::cout << printable(queue.problem) << "; queue states unknown\n";
     if (!accounting.available) {
-      std::cout << printable(accounting.problem)
-                << "; tasks that left the queue are known from their shards only\n";
+      std::cout << printable(accounting.problem) << "; tasks that left the queue are known from their shards only\n";
     }
   }
   return 0;

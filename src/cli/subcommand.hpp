@@ -56,7 +56,11 @@ inline std::int64_t parse_study_id(const std::string& text) {
 /// The study of an id in a store, as stored.
 struct OpenStudy {
   OpenStudy(const std::string& id_text, const std::string& db, StoreAccess access)
-      : id(parse_study_id(id_text)), store(db, access), studies(store), record(find()), study(study::stored_study(record)) {}
+      : id(parse_study_id(id_text)),
+        store(db, access),
+        studies(store),
+        record(find()),
+        study(study::stored_study(record)) {}
   /// The study named by STUDY_ID in the --db store.
   OpenStudy(const boost::program_options::variables_map& vm, const std::string& command, StoreAccess access)
       : OpenStudy(required_option(vm, "STUDY_ID", command), vm["db"].as<std::string>(), access) {}

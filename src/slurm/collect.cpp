@@ -85,9 +85,12 @@ std::vector<TaskView> task_views(StudyStore& studies, std::int64_t study_id, con
   std::vector<TaskView> views;
   for (auto& task : studies.tasks(study_id)) views.push_back({std::move(task), TaskStanding::missing, "", {}});
   for (const auto& [key, found] : files) {  // shards of tasks the store does not know (a lost submission)
-    const bool known = std::any_of(views.begin(), views.end(),
-                                   [&](const TaskView& v) { return v.task.job_id == key.first && v.task.task == key.second; });
-    if (!known) views.push_back({StudyTask::of(key.first, key.second, static_cast<int>(key.second)), TaskStanding::missing, "", {}});
+    const bool known = std::any_of(views.begin(), views.end(), [&](const TaskView& v) {
+      return v.task.job_id == key.first && v.task.task == key.second;
+    });
+    if (!known)
+      views.push_back(
+          {StudyTask::of(key.first, key.second, static_cast<int>(key.second)), TaskStanding::missing, "", {}});
   }
   for (auto& view : views) {
     const TaskKey key{view.task.job_id, view.task.task};

@@ -65,8 +65,8 @@ std::filesystem::path ShardFolder::script(int submission) const {
 }
 
 std::filesystem::path ShardFolder::shard(std::int64_t job, std::int64_t task) const {
-  return folder_ / (std::string(shard_prefix) + std::to_string(task) + std::string(shard_middle) +
-                    std::to_string(job) + std::string(shard_suffix));
+  return folder_ / (std::string(shard_prefix) + std::to_string(task) + std::string(shard_middle) + std::to_string(job) +
+                    std::string(shard_suffix));
 }
 
 std::filesystem::path ShardFolder::unfinished(std::int64_t job, std::int64_t task) const {
@@ -106,7 +106,8 @@ std::vector<ShardFolder::Found> ShardFolder::scan() const {
 
 std::string parse_partition(const std::string& text) {
   static const std::regex valid("[A-Za-z0-9_.-]{1,64}(,[A-Za-z0-9_.-]{1,64}){0,15}");
-  return checked(text, "--partition", valid, "a partition name (letters, digits, '_', '.', '-'), or several, comma-separated");
+  return checked(text, "--partition", valid,
+                 "a partition name (letters, digits, '_', '.', '-'), or several, comma-separated");
 }
 
 std::string parse_account(const std::string& text) {

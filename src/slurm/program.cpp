@@ -72,7 +72,8 @@ bool read_all(Pipe& out, Pipe& err, std::string& out_text, std::string& err_text
         which[n++] = k;
       }
     }
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) return false;
     if (poll(fds, n, static_cast<int>(left.count())) < 0 && errno != EINTR) return false;
     for (nfds_t i = 0; i < n; ++i) {

@@ -55,7 +55,8 @@ void add(TaskStates& states, const std::vector<std::int64_t>& jobs, std::int64_t
 }
 
 /// Runs one of Slurm's programs and parses its answer into task states.
-SlurmReport ask(const std::vector<std::string>& argv, TaskStates (*parse)(std::string_view, const std::vector<std::int64_t>&),
+SlurmReport ask(const std::vector<std::string>& argv,
+                TaskStates (*parse)(std::string_view, const std::vector<std::int64_t>&),
                 const std::vector<std::int64_t>& jobs) {
   if (!find_program(argv[0])) return {false, "'" + argv[0] + "' is not installed here", {}};
   try {
@@ -117,21 +118,21 @@ TaskStates parse_accounting(std::string_view text, const std::vector<std::int64_
 }
 
 SlurmReport queue_states(const std::vector<std::int64_t>& jobs, const std::string& job_name) {
-  const std::vector<std::string> argv{"squeue", "--noheader", "--array",      "--states=all",
-                                      "--name=" + job_name, "--format=%F|%K|%T"};
+  const std::vector<std::string> argv{"squeue",       "--noheader",         "--array",
+                                      "--states=all", "--name=" + job_name, "--format=%F|%K|%T"};
   return ask(argv, parse_queue, jobs);
 }
 
 SlurmReport accounting_states(const std::vector<std::int64_t>& jobs) {
-  const std::vector<std::string> argv{"sacct", "--noheader", "--parsable2", "--allocations",
-                                      "--jobs=" + joined(jobs), "--format=JobID,State"};
+  const std::vector<std::string> argv{
+      "sacct", "--noheader", "--parsable2", "--allocations", "--jobs=" + joined(jobs), "--format=JobID,State"};
   return ask(argv, parse_accounting, jobs);
 }
 
 bool in_flight(std::string_view state) {
-  static constexpr std::string_view running[] = {"PENDING",   "RUNNING",   "CONFIGURING", "COMPLETING", "SUSPENDED",
-                                                 "REQUEUED",  "REQUEUE_FED", "REQUEUE_HOLD", "RESIZING", "SIGNALING",
-                                                 "STAGE_OUT", "STOPPED"};
+  static constexpr std::string_view running[] = {"PENDING",   "RUNNING",   "CONFIGURING", "COMPLETING",
+                                                 "SUSPENDED", "REQUEUED",  "REQUEUE_FED", "REQUEUE_HOLD",
+                                                 "RESIZING",  "SIGNALING", "STAGE_OUT",   "STOPPED"};
   return std::find(std::begin(running), std::end(running), state) != std::end(running);
 }
 

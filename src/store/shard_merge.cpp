@@ -15,11 +15,20 @@ namespace {
 /// The tables of a run's own rows, keyed by run_id and copied as they are.
 constexpr std::array<std::string_view, 4> run_tables{"samples", "cycles", "run_statistics", "calibrations"};
 
-constexpr std::array<std::string_view, 14> merged{
-    "initial_states", "initial_particles",   "runs",              "samples",
-    "cycles",         "run_statistics",      "calibrations",      "comparisons",
-    "comparison_psi_bins", "comparison_energy", "study_point_runs", "study_point_metrics",
-    "study_points",   "study_tasks"};
+constexpr std::array<std::string_view, 14> merged{"initial_states",
+                                                  "initial_particles",
+                                                  "runs",
+                                                  "samples",
+                                                  "cycles",
+                                                  "run_statistics",
+                                                  "calibrations",
+                                                  "comparisons",
+                                                  "comparison_psi_bins",
+                                                  "comparison_energy",
+                                                  "study_point_runs",
+                                                  "study_point_metrics",
+                                                  "study_points",
+                                                  "study_tasks"};
 constexpr std::array<std::string_view, 4> unmerged{"studies", "study_point_values", "study_jobs", "sqlite_sequence"};
 
 /// A shard's ids and their new ids in the store.
@@ -120,7 +129,8 @@ class Shard {
     }
     const StudyRecord& s = studies.front();
     if (s.study_id != study.study_id || s.name != study.name || s.models != study.models ||
-        s.study_text != study.study_text || s.scenario_text != study.scenario_text || s.created_at != study.created_at) {
+        s.study_text != study.study_text || s.scenario_text != study.scenario_text ||
+        s.created_at != study.created_at) {
       throw InputError("shard " + quoted(file_) + " belongs to study " + std::to_string(s.study_id) + " '" + s.name +
                        "' created " + s.created_at + ", not to study " + std::to_string(study.study_id) + " '" +
                        study.name + "' created " + study.created_at + "; nothing was added from it");
@@ -144,12 +154,13 @@ class Shard {
     }
     const std::int64_t version = integer(*db_, "PRAGMA user_version");
     if (version != RunStore::schema_version()) {
-      throw InputError("shard " + quoted(file_) + " has schema version " + std::to_string(version) +
-                       ", the store " + std::to_string(RunStore::schema_version()) +
+      throw InputError("shard " + quoted(file_) + " has schema version " + std::to_string(version) + ", the store " +
+                       std::to_string(RunStore::schema_version()) +
                        ": it was written by another version of pdamp; collect it with the pdamp that ran the task");
     }
-    const std::string schema = "SELECT group_concat(type || ' ' || name || ' ' || coalesce(sql, ''), char(10)) FROM "
-                               "(SELECT * FROM sqlite_schema ORDER BY type, name)";
+    const std::string schema =
+        "SELECT group_concat(type || ' ' || name || ' ' || coalesce(sql, ''), char(10)) FROM "
+        "(SELECT * FROM sqlite_schema ORDER BY type, name)";
     sqlite::Statement ours(store, schema), theirs(*db_, schema);
     ours.step();
     theirs.step();
@@ -270,7 +281,8 @@ class Merger {
     for (const std::int64_t state : states) {
       if (beds_.contains(state)) continue;
       key.bind(1, state);
-      if (!key.step()) throw RuntimeFailure("shard " + quoted(shard_->file()) + " lacks its bed " + std::to_string(state));
+      if (!key.step())
+        throw RuntimeFailure("shard " + quoted(shard_->file()) + " lacks its bed " + std::to_string(state));
       existing.bind(1, key.column_text(0));
       if (existing.step()) {
         check_same_bed(state, existing.column_int(0));
@@ -344,7 +356,8 @@ class Merger {
     } else {
       upsert.bind_null(8);
     }
-    upsert.bind(9, result_->not_added.empty() ? t.message : t.message + (t.message.empty() ? "" : "; ") + result_->not_added);
+    upsert.bind(
+        9, result_->not_added.empty() ? t.message : t.message + (t.message.empty() ? "" : "; ") + result_->not_added);
     upsert.bind(10, std::filesystem::absolute(shard_->file()).string()).run();
   }
 

@@ -16,8 +16,7 @@ namespace pdamp::slurm {
 
 /// The study's shard folders: those its jobs were submitted with, else the one beside the
 /// store.
-std::vector<ShardFolder> study_folders(StudyStore& studies, const std::filesystem::path& store,
-                                       std::int64_t study_id);
+std::vector<ShardFolder> study_folders(StudyStore& studies, const std::filesystem::path& store, std::int64_t study_id);
 
 struct CollectReport {
   std::vector<ShardMerge> merged;    ///< shards merged now (with or without their results)
@@ -31,18 +30,18 @@ CollectReport collect_shards(RunStore& store, const StudyRecord& study, const st
 
 /// Where a task stands.
 enum class TaskStanding {
-  collected,         ///< its shard is merged: StudyTask::outcome tells how its point ended
-  waiting,           ///< its shard is finished, not yet collected
-  in_queue,          ///< Slurm has it pending or running
-  unfinished,        ///< only a .part shard: the task was killed while running (or still runs)
-  missing,           ///< no shard and not in the queue: it never ran, or died before its shard
+  collected,   ///< its shard is merged: StudyTask::outcome tells how its point ended
+  waiting,     ///< its shard is finished, not yet collected
+  in_queue,    ///< Slurm has it pending or running
+  unfinished,  ///< only a .part shard: the task was killed while running (or still runs)
+  missing,     ///< no shard and not in the queue: it never ran, or died before its shard
 };
 std::string_view to_string(TaskStanding standing);
 
 struct TaskView {
   StudyTask task;
   TaskStanding standing = TaskStanding::missing;
-  std::string slurm_state;  ///< the queue's or the accounting's state; empty if neither knows
+  std::string slurm_state;     ///< the queue's or the accounting's state; empty if neither knows
   std::filesystem::path file;  ///< its shard (or .part) file, if any
 };
 

@@ -1,0 +1,275 @@
+/// `pdamp study submit|collect|status|task` end to end against stand-ins for Slurm's
+/// programs (sbatch records the job script, squeue and sacct answer as a cluster without
+/// accounting whose queue has emptied), the job scripts run as Slurm runs them: the study's
+/// results are the bits of the same study run locally, also after a task killed mid-run is
+/// resubmitted. tools/slurm-study-test.sh does the same on a real Slurm.
+#include <doctest/doctest.h>
+#include <sys/stat.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <thread>
+
+#include "study_compare.hpp"
+#include "test_process.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using namespace pdamp::test;
+
+namespace {
+
+void write(const std::filesystem::path& file, const std::string& text, bool executable = false) {
+  std::ofstream(file) << text;
+  if (executable) chmod(file.c_str(), 0755);
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+std::string read(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// sbatch, squeue and sacct stand-ins first in PATH while it lives. sbatch records each job
+/// script and answers job ids from 100 on (or refuses while `refuse` exists); squeue lists
+/// nothing; sacct answers as a cluster without slurmdbd.
+class FakeSlurm {
+ public:
+  explicit FakeSlurm(const TempDir& dir) : bin_(dir / "bin"), path_(std::getenv("PATH")) {
+    std::filesystem::create_directories(bin_);
+    write(bin_ / "sbatch",
+          "#!/bin/sh\n[ \"$1\" = --parsable ] || exit 9\n"
+          "if [ -e \"$0.refuse\" ]; then echo 'sbatch: error: Invalid account' >&2; exit 1; fi\n"
+          "n=$(cat \"$0.next\" 2>/dev/null || echo 100)\necho $((n + 1)) > \"$0.next\"\n"
+          "echo \"$2\" >> \"$0.scripts\"\necho \"$n\"\n",
+          true);
+    write(bin_ / "squeue", "#!/bin/sh\nexit 0\n", true);
+    write(bin_ / "sacct", "#!/bin/sh\necho 'sacct: error: Slurm accounting storage is disabled' >&2\nexit 1\n", true);
+    setenv("PATH", (bin_.string() + ":" + path_).c_str(), 1);
+  }
+  ~FakeSlurm() { setenv("PATH", path_.c_str(), 1); }
+  FakeSlurm(const FakeSlurm&) = delete;
+  FakeSlurm& operator=(const FakeSlurm&) = delete;
+
+  /// The job scripts sbatch was given, in order.
+  std::vector<std::filesystem::path> scripts() const {
+    std::vector<std::filesystem::path> files;
+    std::istringstream lines(read(bin_ / "sbatch.scripts"));
+    for (std::string line; std::getline(lines, line);) files.emplace_back(line);
+    return files;
+  }
+  void refuse(bool on) const {
+    if (on) {
+      write(bin_ / "sbatch.refuse", "");
+    } else {
+      std::filesystem::remove(bin_ / "sbatch.refuse");
+    }
+  }
+
+ private:
+  std::filesystem::path bin_;
+  std::string path_;
+};
+
+/// A task of a job array started as Slurm starts it: the script run by bash with the
+/// array's variables set.
+Process start_task(const std::filesystem::path& script, std::int64_t job, std::int64_t task, const TempDir& dir) {
+  setenv("SLURM_ARRAY_JOB_ID", std::to_string(job).c_str(), 1);
+  setenv("SLURM_ARRAY_TASK_ID", std::to_string(task).c_str(), 1);
+  Process p("/bin/bash", {script.string()}, dir, "task-" + std::to_string(job) + "-" + std::to_string(task));
+  unsetenv("SLURM_ARRAY_JOB_ID");
+  unsetenv("SLURM_ARRAY_TASK_ID");
+  return p;
+}
+
+int run_task(const std::filesystem::path& script, std::int64_t job, std::int64_t task, const TempDir& dir) {
+  Process p = start_task(script, job, task, dir);
+  const int code = p.wait();
+  INFO(p.out() << p.err());
+  CHECK(code == 0);
+  return code;
+}
+
+/// The #SBATCH --array line of a job script.
+std::string array_line(const std::filesystem::path& script) {
+  const std::string text = read(script);
+  const auto at = text.find("#SBATCH --array=");
+  return at == std::string::npos ? "" : text.substr(at, text.find('\n', at) - at);
+}
+
+/// A study of small.ini's two models from one bed each point: four host dampings.
+std::filesystem::path four_points(const TempDir& dir) {
+  const auto file = dir / "four.ini";
+  write(file, "[study]\nname = four\nscenario = " + scenario_file("small").string() +
+                  "\nmodels = both\n[sweep]\nhost.damping_N_s_m = 0.1:0.4:4\nrun.duration_s = 0.1\n");
+  return file;
+}
+
+}  // namespace
+
+TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bits of the study run locally") {
+  TempDir dir("slurm-cli");
+  FakeSlurm slurm(dir);
+  const auto file = four_points(dir);
+  const auto reference = dir / "reference.sqlite", db = dir / "runs.sqlite";
+  REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", reference.string(), "--jobs", "2"}, dir).code == 0);
+
+  Result r = pdamp_cli({"study", "submit", file.string(), "--slurm", "--db", db.string(), "--max-parallel", "2",
+                        "--time", "5"},
+                       dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(contains(r.out, "study 1 'four': 4 points submitted as job 100 (array 1-4)"));
+  REQUIRE(slurm.scripts().size() == 1);
+  const auto script = slurm.scripts()[0];
+  CHECK(script == dir / "runs.sqlite.shards/study-1/submit-1.sh");
+  CHECK(array_line(script) == "#SBATCH --array=1-4%2");
+  CHECK(count_rows(db, "SELECT count(*) FROM study_tasks WHERE job_id = 100 AND collected_at IS NULL") == 4);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs") == 0);
+
+  for (const int task : {1, 2, 4}) run_task(script, 100, task, dir);
+  // Task 3 killed as it starts: its shard stays unfinished.
+  const auto part = dir / "runs.sqlite.shards/study-1/task-3.job-100.sqlite.part";
+  {
+    Process task = start_task(script, 100, 3, dir);
+    for (int i = 0; i < 2000 && !std::filesystem::exists(part); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    task.signal(SIGKILL);
+    CHECK(task.wait() == 128 + SIGKILL);
+  }
+  REQUIRE(std::filesystem::exists(part));
+  CHECK(count_rows(db, "SELECT count(*) FROM runs") == 0);  // the tasks never write the study's store
+
+  r = pdamp_cli({"study", "status", "1", "--db", db.string()}, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "study 1 'four': 0 of 4 points completed, 1 jobs submitted"));
+  CHECK(contains(r.out, "shard waiting"));
+  CHECK(contains(r.out, "task 3 of job 100 left an unfinished shard: it was killed while running"));
+  CHECK(contains(r.out, "sacct: error: Slurm accounting storage is disabled; tasks that left the queue are known "
+                        "from their shards only"));
+
+  r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
+  INFO(r.out);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "collected task 1 of job 100 (point 1, "));
+  CHECK(contains(r.out, "): completed, 2 runs, 1 beds added, 0 shared"));
+  CHECK(contains(r.out, "): completed, 2 runs, 0 beds added, 1 shared"));
+  CHECK(contains(r.out, "pdamp: point 3: task 3 of job 100 left an unfinished shard: it was killed while running (log: " +
+                            (dir / "runs.sqlite.shards/study-1/logs/100_3.log").string() + ")"));
+  CHECK(contains(r.out, "study 1 'four': 3 of 4 points completed; 3 shards collected now, 0 before"));
+  r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
+  CHECK(contains(r.out, "3 of 4 points completed; 0 shards collected now, 3 before"));
+
+  // Only the killed task's point is submitted again.
+  r = pdamp_cli({"study", "submit", "--resume", "1", "--slurm", "--db", db.string()}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(contains(r.out, "1 points submitted as job 101 (array 3)"));
+  REQUIRE(slurm.scripts().size() == 2);
+  CHECK(array_line(slurm.scripts()[1]) == "#SBATCH --array=3");
+  run_task(slurm.scripts()[1], 101, 3, dir);
+  r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "study 1 'four': 4 of 4 points completed; 1 shards collected now, 3 before"));
+  r = pdamp_cli({"study", "submit", "--resume", "1", "--slurm", "--db", db.string()}, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.err, "study 1 has no point to submit"));
+  CHECK(slurm.scripts().size() == 2);
+
+  // The same bits as the study run locally: every sample and cycle of every run, the runs'
+  // rows, the point metrics and the models' agreement; one bed, as locally.
+  const auto [samples_differing, samples] = sample_differences(reference, db);
+  CHECK(samples == 4 * 2 * 201);
+  CHECK(samples_differing == 0);
+  const auto [cycles_differing, cycles] = cycle_differences(reference, db);
+  CHECK(cycles > 0);
+  CHECK(cycles_differing == 0);
+  const auto [runs_differing, runs] = run_differences(reference, db);
+  CHECK(runs == 8);
+  CHECK(runs_differing == 0);
+  CHECK(metric_differences(reference, db) == 0);
+  CHECK(count_rows(db, "ATTACH '" + reference.string() +
+                           "' AS r; SELECT count(*) FROM (SELECT point, envelope_max_rel_diff, psi_mean_abs_diff, "
+                           "dissipated_rel_diff FROM main.study_agreement EXCEPT SELECT point, envelope_max_rel_diff, "
+                           "psi_mean_abs_diff, dissipated_rel_diff FROM r.study_agreement)") == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_agreement") == 4);
+  CHECK(count_rows(db, "SELECT count(*) FROM initial_states") == 1);
+  CHECK(count_rows(reference, "SELECT count(*) FROM initial_states") == 1);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_points WHERE point = 3 AND attempt = 1") == 1);
+}
+
+TEST_CASE("submit checks everything before it writes: exit 2 with the reason, and a dry run writes nothing") {
+  TempDir dir("slurm-submit");
+  FakeSlurm slurm(dir);
+  const auto file = four_points(dir);
+  const auto db = dir / "runs.sqlite";
+  const std::string study = file.string();
+  struct Case {
+    std::vector<std::string> args;
+    std::string message;
+  };
+  const std::vector<Case> cases{
+      {{study}, "--slurm is required"},
+      {{"--slurm"}, "give a STUDY.ini or --resume STUDY_ID"},
+      {{study, "--slurm", "--resume", "1"}, "give a STUDY.ini or --resume STUDY_ID"},
+      {{study, "--slurm", "--time", "2h"}, "--time '2h': a time limit per task as Slurm takes it"},
+      {{study, "--slurm", "--partition", "a b"}, "--partition 'a b'"},
+      {{study, "--slurm", "--max-parallel", "0"}, "--max-parallel '0': must be a whole number from 1"},
+      {{study, "--slurm", "--scratch", "$(id)"}, "--scratch '$(id)'"},
+      {{(dir / "absent.ini").string(), "--slurm"}, "cannot be read (no such file)"},
+      {{"--resume", "1", "--slurm"}, "does not exist"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> args{"study", "submit"};
+    args.insert(args.end(), c.args.begin(), c.args.end());
+    args.insert(args.end(), {"--db", db.string()});
+    const Result r = pdamp_cli(args, dir);
+    CAPTURE(r.err);
+    CHECK(r.code == 2);
+    CHECK(contains(r.err, c.message));
+    CHECK(!std::filesystem::exists(db));
+  }
+  write(dir / "bad.ini", read(file) + "particles.cont = 1\n");
+  CHECK(pdamp_cli({"study", "submit", (dir / "bad.ini").string(), "--slurm", "--db", db.string()}, dir).code == 2);
+
+  Result r = pdamp_cli({"study", "submit", study, "--slurm", "--dry-run", "--db", db.string(), "--account", "lab"}, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "#SBATCH --array=1-4\n#SBATCH --ntasks=1\n"));
+  CHECK(contains(r.out, "#SBATCH --account=lab\n"));
+  CHECK(contains(r.err, "dry run: the job script for 4 points of study 1; nothing was written or submitted"));
+  CHECK(!std::filesystem::exists(db));
+  CHECK(!std::filesystem::exists(dir / "runs.sqlite.shards"));
+  CHECK(slurm.scripts().empty());
+
+  // sbatch refusing: its reason, no job recorded, no script left.
+  slurm.refuse(true);
+  r = pdamp_cli({"study", "submit", study, "--slurm", "--db", db.string()}, dir);
+  CHECK(r.code == 1);
+  CHECK(contains(r.err, "sbatch refused the job script"));
+  CHECK(contains(r.err, "Invalid account"));
+  CHECK(count_rows(db, "SELECT count(*) FROM study_jobs") == 0);
+  CHECK(!std::filesystem::exists(dir / "runs.sqlite.shards/study-1/submit-1.sh"));
+  slurm.refuse(false);
+  r = pdamp_cli({"study", "submit", study, "--slurm", "--db", db.string()}, dir);
+  CHECK(r.code == 0);
+  // A dry run of the stored study: what is left to submit, here every task, as none is in the
+  // (empty) queue or left a shard.
+  r = pdamp_cli({"study", "submit", "--resume", "1", "--slurm", "--dry-run", "--db", db.string()}, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "#SBATCH --array=1-4\n"));
+  CHECK(slurm.scripts().size() == 1);
+
+  // Without sbatch: refused before anything is written.
+  const auto other = dir / "other.sqlite";
+  const std::string path = std::getenv("PATH");
+  setenv("PATH", "/nonexistent", 1);
+  r = pdamp_cli({"study", "submit", study, "--slurm", "--db", other.string()}, dir);
+  setenv("PATH", path.c_str(), 1);
+  CHECK(r.code == 1);
+  CHECK(contains(r.err, "sbatch is not installed here"));
+  CHECK(!std::filesystem::exists(other));
+}

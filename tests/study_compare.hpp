@@ -31,10 +31,10 @@ inline std::pair<std::int64_t, std::int64_t> run_row_differences(const std::file
   std::string differs = "y.run_id IS NULL";
   for (const char* column : columns) differs += std::string(" OR x.") + column + " IS NOT y." + column;
   sqlite::Statement q(d, "SELECT coalesce(sum(" + differs + "), 0), count(*), (SELECT count(*) FROM " +
-                             latest_runs("b") + " rb JOIN b." + table + " USING (run_id)) FROM " +
-                             latest_runs("main") + " ra JOIN " + latest_runs("b") + " rb USING (point, model) JOIN main." +
-                             table + " x ON x.run_id = ra.run_id LEFT JOIN b." + table +
-                             " y ON y.run_id = rb.run_id AND y." + key + " = x." + key);
+                             latest_runs("b") + " rb JOIN b." + table + " USING (run_id)) FROM " + latest_runs("main") +
+                             " ra JOIN " + latest_runs("b") + " rb USING (point, model) JOIN main." + table +
+                             " x ON x.run_id = ra.run_id LEFT JOIN b." + table + " y ON y.run_id = rb.run_id AND y." +
+                             key + " = x." + key);
   q.step();
   const std::int64_t missing_in_a = q.column_int(2) - q.column_int(1);
   return {q.column_int(0) + missing_in_a, q.column_int(1)};
@@ -62,10 +62,10 @@ inline std::pair<std::int64_t, std::int64_t> cycle_differences(const std::filesy
 /// The same for the runs' rows: all but their ids, times and wall times.
 inline std::pair<std::int64_t, std::int64_t> run_differences(const std::filesystem::path& a,
                                                              const std::filesystem::path& b) {
-  return run_row_differences(a, b, "runs", "model",
-                             {"scenario_name", "scenario_text", "seed", "n_particles", "duration_s", "dt_s",
-                              "pdamp_version", "status", "message", "sim_time_s", "initial_energy_J",
-                              "energy_balance_rel_err", "solid_fraction"});
+  return run_row_differences(
+      a, b, "runs", "model",
+      {"scenario_name", "scenario_text", "seed", "n_particles", "duration_s", "dt_s", "pdamp_version", "status",
+       "message", "sim_time_s", "initial_energy_J", "energy_balance_rel_err", "solid_fraction"});
 }
 
 /// How many point metrics differ between two stores of one study (all but the wall time).

@@ -179,9 +179,7 @@ TEST_CASE("collect merges every table a shard's point has, and leaves the study'
   while (tables.step()) {
     const std::string name = tables.column_text(0);
     CAPTURE(name);
-    const auto in = [&](std::span<const std::string_view> list) {
-      return std::count(list.begin(), list.end(), name);
-    };
+    const auto in = [&](std::span<const std::string_view> list) { return std::count(list.begin(), list.end(), name); };
     CHECK(in(merged_tables()) + in(unmerged_tables()) == 1);
     ++n;
   }

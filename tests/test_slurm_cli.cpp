@@ -117,9 +117,8 @@ TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bi
   const auto reference = dir / "reference.sqlite", db = dir / "runs.sqlite";
   REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", reference.string(), "--jobs", "2"}, dir).code == 0);
 
-  Result r = pdamp_cli({"study", "submit", file.string(), "--slurm", "--db", db.string(), "--max-parallel", "2",
-                        "--time", "5"},
-                       dir);
+  Result r = pdamp_cli(
+      {"study", "submit", file.string(), "--slurm", "--db", db.string(), "--max-parallel", "2", "--time", "5"}, dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(contains(r.out, "study 1 'four': 4 points submitted as job 100 (array 1-4)"));
@@ -149,8 +148,9 @@ TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bi
   CHECK(contains(r.out, "study 1 'four': 0 of 4 points completed, 1 jobs submitted"));
   CHECK(contains(r.out, "shard waiting"));
   CHECK(contains(r.out, "task 3 of job 100 left an unfinished shard: it was killed while running"));
-  CHECK(contains(r.out, "sacct: error: Slurm accounting storage is disabled; tasks that left the queue are known "
-                        "from their shards only"));
+  CHECK(contains(r.out,
+                 "sacct: error: Slurm accounting storage is disabled; tasks that left the queue are known "
+                 "from their shards only"));
 
   r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
   INFO(r.out);
@@ -158,8 +158,9 @@ TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bi
   CHECK(contains(r.out, "collected task 1 of job 100 (point 1, "));
   CHECK(contains(r.out, "): completed, 2 runs, 1 beds added, 0 shared"));
   CHECK(contains(r.out, "): completed, 2 runs, 0 beds added, 1 shared"));
-  CHECK(contains(r.out, "pdamp: point 3: task 3 of job 100 left an unfinished shard: it was killed while running (log: " +
-                            (dir / "runs.sqlite.shards/study-1/logs/100_3.log").string() + ")"));
+  CHECK(
+      contains(r.out, "pdamp: point 3: task 3 of job 100 left an unfinished shard: it was killed while running (log: " +
+                          (dir / "runs.sqlite.shards/study-1/logs/100_3.log").string() + ")"));
   CHECK(contains(r.out, "study 1 'four': 3 of 4 points completed; 3 shards collected now, 0 before"));
   r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
   CHECK(contains(r.out, "3 of 4 points completed; 0 shards collected now, 3 before"));
@@ -236,7 +237,8 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
   write(dir / "bad.ini", read(file) + "particles.cont = 1\n");
   CHECK(pdamp_cli({"study", "submit", (dir / "bad.ini").string(), "--slurm", "--db", db.string()}, dir).code == 2);
 
-  Result r = pdamp_cli({"study", "submit", study, "--slurm", "--dry-run", "--db", db.string(), "--account", "lab"}, dir);
+  Result r =
+      pdamp_cli({"study", "submit", study, "--slurm", "--dry-run", "--db", db.string(), "--account", "lab"}, dir);
   CHECK(r.code == 0);
   CHECK(contains(r.out, "#SBATCH --array=1-4\n#SBATCH --ntasks=1\n"));
   CHECK(contains(r.out, "#SBATCH --account=lab\n"));

@@ -1,0 +1,202 @@
+#!/usr/bin/env bash
+# Integration test of studies on Slurm (issue 26) on a real single-node Slurm
+# (tools/slurm-local.sh): submits an 8-point study of data/scenarios/small.ini (both models
+# from one bed per point) as a job array of at most 2 tasks at once, cancels one task mid-run
+# (scancel), collects, resubmits the missing point with --resume, collects again, and checks
+# the store bit for bit against the same study run locally with `pdamp study run`: each
+# point's metrics, the models' agreement, and every column but ids and times of the latest
+# runs, their samples and cycles (doubles compared as their IEEE-754 bits). Then stops the
+# cluster and checks nothing of it is left. Prints the time from submit to collected.
+# Needs root (or sudo), the packages tools/slurm-local.sh installs, and the ci build
+# (tools/build.sh ci), or PDAMP=/path/to/pdamp. Fails with a message if anything is missing.
+# Usage: tools/slurm-study-test.sh
+set -euo pipefail
+
+repo=$(cd "$(dirname "$0")/.." && pwd)
+# shellcheck source=tools/slurm-lib.sh
+source "$repo/tools/slurm-lib.sh"
+local_slurm=$repo/tools/slurm-local.sh
+pdamp=${PDAMP:-$repo/build/ci/src/pdamp}
+queue_timeout_s=300
+cancelled_point=2 # one of the long points (run.duration_s = 1.2)
+
+fail() {
+  echo "slurm-study-test: FAIL: $*" >&2
+  exit 1
+}
+say() { echo "slurm-study-test: $*"; }
+
+on_exit() {
+  local status=$?
+  if ((status != 0)) && [ -n "${SLURM_CONF:-}" ] && [ -f "$SLURM_CONF" ]; then
+    squeue -r -t all >&2 || true
+    [ -z "${work:-}" ] || tail -n 5 "$work"/runs.sqlite.shards/study-1/logs/*.log >&2 || true
+    "$local_slurm" stop >&2 || true
+  fi
+  [ -z "${work:-}" ] || rm -rf "$work"
+}
+
+check_prerequisites() {
+  [ -x "$pdamp" ] || fail "no pdamp at $pdamp: build it (tools/build.sh ci) or give PDAMP=/path/to/pdamp"
+  command -v sqlite3 >/dev/null || "$repo/tools/setup.sh" sqlite3 >/dev/null ||
+    fail "sqlite3 is missing and tools/setup.sh sqlite3 failed"
+  [ "$(sqlite3 :memory: "SELECT hex(ieee754_to_blob(-0.0))")" = 8000000000000000 ] ||
+    fail "this sqlite3 lacks ieee754_to_blob, which the bit-for-bit comparison needs"
+  if "$local_slurm" status >/dev/null 2>&1; then
+    fail "a local Slurm is already running (tools/slurm-local.sh status); stop it first"
+  fi
+}
+
+# 8 points: four host dampings, each for a short and a long run.
+write_study() {
+  cat >"$work/study.ini" <<EOF
+[study]
+name = slurm-test
+scenario = $repo/data/scenarios/small.ini
+models = both
+
+[sweep]
+host.damping_N_s_m = 0.1, 0.2, 0.3, 0.4
+run.duration_s = 0.15, 1.2
+EOF
+}
+
+start_cluster() {
+  local output
+  output=$("$local_slurm" start) || fail "tools/slurm-local.sh start failed"
+  eval "$(grep '^export SLURM_CONF=' <<<"$output")"
+  [ -f "${SLURM_CONF:-}" ] || fail "start printed no usable SLURM_CONF line: $output"
+}
+
+# Runs pdamp; the output also goes to the test's output.
+run_pdamp() {
+  "$pdamp" "$@" --db "$work/runs.sqlite" 2>&1 | tee "$work/last.out"
+  return "${PIPESTATUS[0]}"
+}
+
+expect_output() {
+  grep -qF -- "$1" "$work/last.out" || fail "expected '$1' in the output above"
+}
+
+# The job id in submit's output: "... submitted as job J (array ...)".
+submitted_job() {
+  sed -n 's/.* submitted as job \([0-9]*\) (array.*/\1/p' "$work/last.out"
+}
+
+job_done() {
+  [ -z "$(squeue -h -j "$1" -t PENDING,RUNNING,CONFIGURING,COMPLETING,SUSPENDED 2>/dev/null)" ]
+}
+
+# The task's log shows it running the soft model, past settling.
+task_computing() {
+  grep -q "soft" "$work/runs.sqlite.shards/study-1/logs/${1}_$cancelled_point.log" 2>/dev/null
+}
+
+# Each row of a query on the latest runs of a point, as text with doubles as their bits, in
+# both stores; prints the rows in either store that the other lacks, and how many rows
+# the Slurm store has.
+compare_rows() {
+  local what=$1 table=$2 columns=$3 expression="" column
+  for column in ${columns//,/ }; do
+    expression+="${expression:+, }CASE typeof(x.$column) WHEN 'real' THEN hex(ieee754_to_blob(x.$column)) ELSE quote(x.$column) END"
+  done
+  local latest="SELECT l.point, l.model, l.run_id FROM DB.study_point_runs l JOIN DB.study_points p USING (study_id, point, attempt)"
+  local rows="SELECT r.point, r.model, $expression FROM ($latest) r JOIN DB.$table x USING (run_id)"
+  local ours=${rows//DB/main} theirs=${rows//DB/ref}
+  local differing count
+  differing=$(($(sqlite3 "$work/runs.sqlite" "ATTACH '$work/reference.sqlite' AS ref;
+    SELECT count(*) FROM (SELECT * FROM ($ours) EXCEPT SELECT * FROM ($theirs));
+    SELECT count(*) FROM (SELECT * FROM ($theirs) EXCEPT SELECT * FROM ($ours));" | paste -sd+)))
+  count=$(sqlite3 "$work/runs.sqlite" "SELECT count(*) FROM ($ours)")
+  ((count > 0)) || fail "no $what to compare"
+  ((differing == 0)) || fail "$differing $what differ between the Slurm study and the local one"
+  say "$what: $count rows, the same bits"
+}
+
+compare_point_tables() {
+  local metrics="dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J, psi_peak, psi_peak_gamma, final_amplitude_m, cycles, energy_balance_rel_err"
+  local agreement="envelope_max_rel_diff, envelope_rms_rel_diff, psi_mean_abs_diff, dissipated_rel_diff, small_amplitude_freq_soft_hz, small_amplitude_freq_hard_hz"
+  local differing
+  differing=$(($(sqlite3 "$work/runs.sqlite" "ATTACH '$work/reference.sqlite' AS ref;
+    SELECT count(*) FROM (SELECT point, model, $metrics FROM main.study_point_metrics
+      EXCEPT SELECT point, model, $metrics FROM ref.study_point_metrics);
+    SELECT count(*) FROM (SELECT point, model, $metrics FROM ref.study_point_metrics
+      EXCEPT SELECT point, model, $metrics FROM main.study_point_metrics);
+    SELECT count(*) FROM (SELECT point, $agreement FROM main.study_agreement
+      EXCEPT SELECT point, $agreement FROM ref.study_agreement);
+    SELECT abs(16 - count(*)) FROM main.study_point_metrics; SELECT abs(8 - count(*)) FROM main.study_agreement;" |
+    paste -sd+)))
+  ((differing == 0)) || fail "$differing point metrics or agreements differ between the Slurm study and the local one"
+  say "point metrics (16) and the models' agreement (8): the same"
+}
+
+compare_stores() {
+  compare_point_tables
+  compare_rows "runs" runs "scenario_name, scenario_text, seed, n_particles, duration_s, dt_s, pdamp_version, status, message, sim_time_s, initial_energy_J, energy_balance_rel_err, solid_fraction"
+  compare_rows "samples" samples "t_s, host_z_m, host_v_m_s, particle_translational_J, particle_rotational_J, host_kinetic_J, spring_potential_J, gravitational_potential_J, contact_elastic_J, excitation_work_J, dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J, energy_balance_rel_err, contacts, events, steps"
+  compare_rows "cycles" cycles "cycle, t_start_s, t_end_s, amplitude_m, freq_hz, gamma, psi, psi_impact, psi_friction, psi_viscous, max_host_kinetic_J"
+  local beds
+  beds=$(sqlite3 "$work/runs.sqlite" "SELECT count(*) FROM initial_states")
+  [ "$beds" = 1 ] || fail "$beds settled beds in the Slurm study's store; the shards' identical beds should be one"
+}
+
+submit_and_cancel() {
+  local job
+  run_pdamp study submit "$work/study.ini" --slurm --max-parallel 2 --time 10 || fail "study submit failed"
+  expect_output "8 points submitted as job"
+  job=$(submitted_job)
+  grep -qx "#SBATCH --array=1-8%2" "$work/runs.sqlite.shards/study-1/submit-1.sh" || fail "the job script's array is not 1-8%2"
+  wait_for "task $cancelled_point of job $job to compute" "$queue_timeout_s" task_computing "$job"
+  scancel "${job}_$cancelled_point"
+  say "cancelled task $cancelled_point of job $job mid-run"
+  wait_for "job $job to end" "$queue_timeout_s" job_done "$job"
+  first_job=$job
+}
+
+collect_and_resume() {
+  local job
+  run_pdamp study status 1 || fail "study status failed"
+  run_pdamp study collect 1 || fail "study collect failed"
+  expect_output "7 of 8 points completed;"
+  # The cancelled task either stored its point as interrupted (SIGTERM) or was killed first.
+  grep -qE "collected task $cancelled_point of job $first_job .*: interrupted|point $cancelled_point: task $cancelled_point of job $first_job left an unfinished shard" "$work/last.out" ||
+    fail "collect does not report the cancelled task $cancelled_point"
+  run_pdamp study submit --resume 1 --slurm --time 10 || fail "study submit --resume failed"
+  expect_output "1 points submitted as job"
+  job=$(submitted_job)
+  wait_for "job $job to end" "$queue_timeout_s" job_done "$job"
+  run_pdamp study collect 1 || fail "the second study collect failed"
+  expect_output "8 of 8 points completed"
+  run_pdamp study collect 1 || fail "the third study collect failed"
+  expect_output "0 shards collected now"
+}
+
+stop_cluster() {
+  local folder
+  folder=$(dirname "$SLURM_CONF")
+  "$local_slurm" stop >/dev/null || fail "tools/slurm-local.sh stop failed"
+  [ ! -e "$folder" ] || fail "stop left $folder"
+  unset SLURM_CONF
+}
+
+main() {
+  local started_at=$EPOCHREALTIME submitted_at collected_at
+  check_prerequisites
+  trap on_exit EXIT
+  work=$(mktemp -d /tmp/pdamp-slurm-study.XXXXXX)
+  chmod 755 "$work"
+  write_study
+  start_cluster
+  submitted_at=$EPOCHREALTIME
+  submit_and_cancel
+  collect_and_resume
+  collected_at=$EPOCHREALTIME
+  stop_cluster
+  "$pdamp" study run "$work/study.ini" --db "$work/reference.sqlite" --jobs 2 >/dev/null 2>"$work/reference.err" ||
+    fail "the local study run failed: $(cat "$work/reference.err")"
+  compare_stores
+  say "submit to collected (with the cancel and the resubmission): $(awk "BEGIN { printf \"%.1f\", $collected_at - $submitted_at }") s; whole test $(awk "BEGIN { printf \"%.1f\", $EPOCHREALTIME - $started_at }") s"
+  say "passed"
+}
+
+main

@@ -45,17 +45,32 @@ SlurmOptions slurm_options(const po::variables_map& vm) {
   return o;
 }
 
-/// The study's tasks as they stand, asking Slurm where its jobs may still be listed.
-std::vector<TaskView> study_tasks(StudyStore& studies, std::int64_t id, const std::vector<ShardFolder>& folders,
-                                  SlurmReport& queue, SlurmReport& accounting, bool ask_accounting) {
-  std::vector<std::int64_t> jobs;
-  for (const auto& job : studies.jobs(id)) jobs.push_back(job.job_id);
-  if (!jobs.empty()) {
-    queue = queue_states(jobs, job_name(id));
-    if (ask_accounting) accounting = accounting_states(jobs);
+/// A stored study on the cluster: its store, its shard folders, and what Slurm says of its
+/// tasks.
+struct ClusterStudy {
+  ClusterStudy(const std::string& id, const std::string& db_file, StoreAccess access)
+      : db(db_file), open(id, db_file, access), folders(study_folders(open.studies, db_file, open.id)) {}
+  ClusterStudy(const po::variables_map& vm, const std::string& command, StoreAccess access)
+      : ClusterStudy(required_option(vm, "STUDY_ID", command), vm["db"].as<std::string>(), access) {}
+
+  /// The tasks as they stand now, asking squeue (and sacct) where the study has jobs.
+  std::vector<TaskView> tasks(bool ask_accounting) {
+    std::vector<std::int64_t> jobs;
+    for (const auto& job : open.studies.jobs(open.id)) jobs.push_back(job.job_id);
+    if (!jobs.empty()) {
+      queue = queue_states(jobs, job_name(open.id));
+      if (ask_accounting) accounting = accounting_states(jobs);
+    }
+    return task_views(open.studies, open.id, folders, queue, accounting);
   }
-  return task_views(studies, id, folders, queue, accounting);
-}
+  bool submitted() { return !open.studies.jobs(open.id).empty(); }
+  ShardFolder folder() const { return ShardFolder(db, open.id); }
+
+  std::string db;
+  OpenStudy open;
+  std::vector<ShardFolder> folders;
+  SlurmReport queue, accounting;
+};
 
 /// The latest task of each point.
 std::map<int, const TaskView*> latest_tasks(const std::vector<TaskView>& tasks) {
@@ -138,21 +153,23 @@ std::pair<std::int64_t, std::vector<std::int64_t>> planned(const std::string& db
   std::vector<std::int64_t> all;
   for (const auto& p : study.points) all.push_back(p.point);
   if (!std::filesystem::exists(db)) return {1, all};
-  RunStore store(db, StoreAccess::read);
-  StudyStore studies(store);
-  if (const auto record = studies.find_study(study.file.name)) {
-    const auto differences = study::study_differences(study::stored_study(*record), study);
-    if (!differences.empty()) study::find_or_create_study(store, study);  // throws, naming the differences
-    SlurmReport queue, accounting;
-    const auto folders = study_folders(studies, db, record->study_id);
-    return {record->study_id,
-            points_to_submit(studies, record->study_id,
-                             study_tasks(studies, record->study_id, folders, queue, accounting, false))};
+  std::int64_t stored = 0;
+  {
+    RunStore store(db, StoreAccess::read);
+    if (const auto record = StudyStore(store).find_study(study.file.name)) {
+      if (!study::study_differences(study::stored_study(*record), study).empty()) {
+        study::find_or_create_study(store, study);  // refuses it, naming the differences
+      }
+      stored = record->study_id;
+    } else {
+      sqlite::Statement next(store.database(),
+                             "SELECT coalesce(max(seq), 0) + 1 FROM sqlite_sequence WHERE name = 'studies'");
+      next.step();
+      return {next.column_int(0), all};
+    }
   }
-  sqlite::Statement next(store.database(),
-                         "SELECT coalesce(max(seq), 0) + 1 FROM sqlite_sequence WHERE name = 'studies'");
-  next.step();
-  return {next.column_int(0), all};
+  ClusterStudy cluster(std::to_string(stored), db, StoreAccess::read);
+  return {stored, points_to_submit(cluster.open.studies, stored, cluster.tasks(false))};
 }
 
 int dry_run(const std::string& db, const study::Study& study, const SlurmOptions& options) {
@@ -167,19 +184,18 @@ int dry_run(const std::string& db, const study::Study& study, const SlurmOptions
   return 0;
 }
 
-int submit_points(OpenStudy& open, const std::string& db, const SlurmOptions& options) {
-  const auto folders = study_folders(open.studies, db, open.id);
-  const CollectReport collected = collect_shards(open.store, open.record, folders);
+int submit_points(ClusterStudy& cluster, const SlurmOptions& options) {
+  OpenStudy& open = cluster.open;
+  const CollectReport collected = collect_shards(open.store, open.record, cluster.folders);
   report_collect(collected, std::cerr);
   if (!collected.refused.empty()) {
     throw RuntimeFailure(
         "the shards refused above stay in the way: move them out of the shard folder, then submit "
         "again; nothing was submitted");
   }
-  SlurmReport queue, accounting;
-  const auto tasks = study_tasks(open.studies, open.id, folders, queue, accounting, false);
-  if (!open.studies.jobs(open.id).empty() && !queue.available) {
-    throw RuntimeFailure("cannot tell which of the study's tasks are still queued (" + queue.problem +
+  const auto tasks = cluster.tasks(false);
+  if (cluster.submitted() && !cluster.queue.available) {
+    throw RuntimeFailure("cannot tell which of the study's tasks are still queued (" + cluster.queue.problem +
                          "); nothing was submitted");
   }
   const auto points = points_to_submit(open.studies, open.id, tasks);
@@ -188,11 +204,11 @@ int submit_points(OpenStudy& open, const std::string& db, const SlurmOptions& op
               << "study status " << open.id << "')\n";
     return 0;
   }
-  const ShardFolder folder(db, open.id);
+  const ShardFolder folder = cluster.folder();
   std::filesystem::create_directories(folder.logs());
   write_folder_study(folder, open.record);
-  const std::string text = job_script({open.id, open.record.name, this_executable(), folder, points, options});
-  const auto script = new_script(folder, text);
+  const auto script =
+      new_script(folder, job_script({open.id, open.record.name, this_executable(), folder, points, options}));
   std::int64_t job = 0;
   try {
     job = submit(script);
@@ -252,10 +268,11 @@ int study_submit(const std::vector<std::string>& args) {
   const SlurmOptions options = slurm_options(vm);
   const std::string db = vm["db"].as<std::string>();
   if (vm.count("resume")) {
-    OpenStudy open(vm["resume"].as<std::string>(), db, vm.count("dry-run") ? StoreAccess::read : StoreAccess::modify);
-    if (vm.count("dry-run")) return dry_run(db, open.study, options);
-    check_study_files(open);
-    return submit_points(open, db, options);
+    if (vm.count("dry-run"))
+      return dry_run(db, OpenStudy(vm["resume"].as<std::string>(), db, StoreAccess::read).study, options);
+    ClusterStudy cluster(vm["resume"].as<std::string>(), db, StoreAccess::modify);
+    check_study_files(cluster.open);
+    return submit_points(cluster, options);
   }
   // Everything that can be wrong with the study is found before the store is touched.
   study::Study study =
@@ -272,27 +289,24 @@ int study_submit(const std::vector<std::string>& args) {
     RunStore store(db);
     id = study::find_or_create_study(store, study);
   }
-  OpenStudy open(std::to_string(id), db, StoreAccess::modify);
-  return submit_points(open, db, options);
+  ClusterStudy cluster(std::to_string(id), db, StoreAccess::modify);
+  return submit_points(cluster, options);
 }
 
 int study_collect(const std::vector<std::string>& args) {
   Subcommand command("pdamp study collect STUDY_ID [--db FILE]", {"STUDY_ID"});
   if (!command.parse(args)) return 0;
-  const std::string db = command.vm()["db"].as<std::string>();
-  OpenStudy open(command.vm(), "study collect", StoreAccess::modify);
-  const auto folders = study_folders(open.studies, db, open.id);
-  const CollectReport report = collect_shards(open.store, open.record, folders);
+  ClusterStudy cluster(command.vm(), "study collect", StoreAccess::modify);
+  OpenStudy& open = cluster.open;
+  const CollectReport report = collect_shards(open.store, open.record, cluster.folders);
   report_collect(report, std::cout);
-  SlurmReport queue, accounting;
-  const auto tasks = study_tasks(open.studies, open.id, folders, queue, accounting, false);
-  const int completed = report_points(open.studies, open.id, tasks, ShardFolder(db, open.id), std::cout);
+  const int completed = report_points(open.studies, open.id, cluster.tasks(false), cluster.folder(), std::cout);
   std::cout << "study " << open.id << " '" << printable(open.record.name) << "': " << completed << " of "
             << open.study.points.size() << " points completed; " << report.merged.size() << " shards collected now, "
-            << report.already_collected << " before" << (report.refused.empty() ? "" : ", ")
-            << (report.refused.empty() ? "" : std::to_string(report.refused.size()) + " refused") << "\n";
-  if (!queue.available && !open.studies.jobs(open.id).empty()) {
-    std::cout << "pdamp: the queue was not asked (" << printable(queue.problem) << ")\n";
+            << report.already_collected << " before"
+            << (report.refused.empty() ? "" : ", " + std::to_string(report.refused.size()) + " refused") << "\n";
+  if (cluster.submitted() && !cluster.queue.available) {
+    std::cout << "pdamp: the queue was not asked (" << printable(cluster.queue.problem) << ")\n";
   }
   return report.refused.empty() ? 0 : 1;
 }
@@ -300,11 +314,9 @@ int study_collect(const std::vector<std::string>& args) {
 int study_status(const std::vector<std::string>& args) {
   Subcommand command("pdamp study status STUDY_ID [--db FILE]", {"STUDY_ID"});
   if (!command.parse(args)) return 0;
-  const std::string db = command.vm()["db"].as<std::string>();
-  OpenStudy open(command.vm(), "study status", StoreAccess::read);
-  const auto folders = study_folders(open.studies, db, open.id);
-  SlurmReport queue, accounting;
-  const auto tasks = study_tasks(open.studies, open.id, folders, queue, accounting, true);
+  ClusterStudy cluster(command.vm(), "study status", StoreAccess::read);
+  OpenStudy& open = cluster.open;
+  const auto tasks = cluster.tasks(true);
   const auto latest = latest_tasks(tasks);
   TextTable table({{"point", true}, {"status"}, {"job_task"}, {"slurm"}, {"shard"}, {"message", false, 80}});
   for (const auto& p : open.studies.points(open.id)) {
@@ -314,16 +326,17 @@ int study_status(const std::vector<std::string>& args) {
                    view ? std::to_string(view->task.job_id) + "_" + std::to_string(view->task.task) : "-",
                    view && !view->slurm_state.empty() ? view->slurm_state : "-",
                    view ? std::string(to_string(view->standing)) : "-",
-                   p.status == PointStatus::completed ? "" : point_problem(p, view, ShardFolder(db, open.id))});
+                   p.status == PointStatus::completed ? "" : point_problem(p, view, cluster.folder())});
   }
   const auto summary = open.studies.summary(open.id);
   std::cout << "study " << open.id << " '" << printable(open.record.name) << "': " << summary->completed << " of "
             << summary->n_points << " points completed, " << open.studies.jobs(open.id).size() << " jobs submitted\n";
   table.print(std::cout);
-  if (!open.studies.jobs(open.id).empty()) {
-    if (!queue.available) std::cout << printable(queue.problem) << "; queue states unknown\n";
-    if (!accounting.available) {
-      std::cout << printable(accounting.problem) << "; tasks that left the queue are known from their shards only\n";
+  if (cluster.submitted()) {
+    if (!cluster.queue.available) std::cout << printable(cluster.queue.problem) << "; queue states unknown\n";
+    if (!cluster.accounting.available) {
+      std::cout << printable(cluster.accounting.problem)
+                << "; tasks that left the queue are known from their shards only\n";
     }
   }
   return 0;

@@ -234,6 +234,11 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
     CHECK(contains(r.err, c.message));
     CHECK(!std::filesystem::exists(db));
   }
+  const auto spaced = dir / "my runs.sqlite";
+  const Result space = pdamp_cli({"study", "submit", study, "--slurm", "--db", spaced.string()}, dir);
+  CHECK(space.code == 2);
+  CHECK(contains(space.err, "that a job script's #SBATCH lines cannot hold"));
+  CHECK(!std::filesystem::exists(spaced));
   write(dir / "bad.ini", read(file) + "particles.cont = 1\n");
   CHECK(pdamp_cli({"study", "submit", (dir / "bad.ini").string(), "--slurm", "--db", db.string()}, dir).code == 2);
 

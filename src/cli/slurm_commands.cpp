@@ -267,6 +267,7 @@ int study_submit(const std::vector<std::string>& args) {
   }
   const SlurmOptions options = slurm_options(vm);
   const std::string db = vm["db"].as<std::string>();
+  checked_script_path(ShardFolder(db, 1).path());
   if (vm.count("resume")) {
     if (vm.count("dry-run"))
       return dry_run(db, OpenStudy(vm["resume"].as<std::string>(), db, StoreAccess::read).study, options);

@@ -29,21 +29,6 @@ std::string shell_quoted(const std::string& text) {
   return quoted + "'";
 }
 
-/// A path for an #SBATCH line, which Slurm splits at white space and scans for '%' patterns.
-std::string sbatch_path(const std::filesystem::path& path) {
-  const std::string text = path.string();
-  const auto bad = std::find_if(text.begin(), text.end(), [](unsigned char c) {
-    return c <= ' ' || c == 0x7f || c == '%' || c == '"' || c == '\'' || c == '\\';
-  });
-  if (bad != text.end()) {
-    throw InputError("the shard folder '" + text + "' holds a character (" +
-                     (*bad == ' ' ? std::string("a space") : "'" + std::string(1, *bad) + "'") +
-                     ") that a job script's #SBATCH lines cannot hold; give the store (--db) a path without white "
-                     "space, quotes, '\\' or '%'");
-  }
-  return text;
-}
-
 std::string checked(const std::string& text, const std::string& what, const std::regex& valid,
                     const std::string& expected) {
   if (!std::regex_match(text, valid)) throw InputError(what + " '" + text + "': " + expected);
@@ -104,6 +89,21 @@ std::vector<ShardFolder::Found> ShardFolder::scan() const {
   return found;
 }
 
+// #SBATCH lines are split at white space and scanned for '%' patterns.
+std::string checked_script_path(const std::filesystem::path& path) {
+  const std::string text = path.string();
+  const auto bad = std::find_if(text.begin(), text.end(), [](unsigned char c) {
+    return c <= ' ' || c == 0x7f || c == '%' || c == '"' || c == '\'' || c == '\\';
+  });
+  if (bad != text.end()) {
+    throw InputError("the shard folder '" + text + "' holds a character (" +
+                     (*bad == ' ' ? std::string("a space") : "'" + std::string(1, *bad) + "'") +
+                     ") that a job script's #SBATCH lines cannot hold; give the store (--db) a path without white "
+                     "space, quotes, '\\' or '%'");
+  }
+  return text;
+}
+
 std::string parse_partition(const std::string& text) {
   static const std::regex valid("[A-Za-z0-9_.-]{1,64}(,[A-Za-z0-9_.-]{1,64}){0,15}");
   return checked(text, "--partition", valid,
@@ -136,8 +136,9 @@ std::string array_ranges(std::vector<std::int64_t> indices) {
   for (std::size_t i = 0; i < indices.size();) {
     std::size_t j = i;
     while (j + 1 < indices.size() && indices[j + 1] == indices[j] + 1) ++j;
-    text += (text.empty() ? "" : ",") + std::to_string(indices[i]);
-    if (j > i) text += "-" + std::to_string(indices[j]);
+    if (!text.empty()) text += ',';
+    text += std::to_string(indices[i]);
+    if (j > i) text.append("-").append(std::to_string(indices[j]));
     i = j + 1;
   }
   return text;
@@ -150,14 +151,14 @@ std::string job_script(const JobScriptRequest& r) {
     << "# pdamp study " << r.study_id << ": " << r.tasks.size()
     << " points as a job array, one task per point (task T runs point T).\n"
     << "# Written by 'pdamp study submit' (pdamp " << version_string << "), which records the job in the\n"
-    << "# study's store. Each task writes its own shard store in " << sbatch_path(r.folder.path()) << ";\n"
+    << "# study's store. Each task writes its own shard store in " << checked_script_path(r.folder.path()) << ";\n"
     << "# 'pdamp study collect " << r.study_id << "' merges them into the store.\n"
     << "#SBATCH --job-name=pdamp-study-" << r.study_id << "\n"
     << "#SBATCH --array=" << array_ranges(r.tasks) << (o.max_parallel > 0 ? "%" + std::to_string(o.max_parallel) : "")
     << "\n"
     << "#SBATCH --ntasks=1\n"
     << "#SBATCH --cpus-per-task=" << o.threads << "\n"
-    << "#SBATCH --output=" << sbatch_path(r.folder.logs()) << "/%A_%a.log\n";
+    << "#SBATCH --output=" << checked_script_path(r.folder.logs()) << "/%A_%a.log\n";
   if (!o.partition.empty()) s << "#SBATCH --partition=" << o.partition << "\n";
   if (!o.account.empty()) s << "#SBATCH --account=" << o.account << "\n";
   if (!o.time_limit.empty()) s << "#SBATCH --time=" << o.time_limit << "\n";

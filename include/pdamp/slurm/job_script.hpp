@@ -61,6 +61,10 @@ std::string parse_account(const std::string& text);
 std::string parse_time_limit(const std::string& text);
 std::string parse_scratch(const std::string& text);
 
+/// The shard folder's path as a job script's #SBATCH lines take it. Throws InputError for
+/// a path they cannot hold (white space, quotes, '\\', '%'), naming the character.
+std::string checked_script_path(const std::filesystem::path& path);
+
 /// Array indices as Slurm's --array list: "1-3,5,7-8".
 std::string array_ranges(std::vector<std::int64_t> indices);
 
@@ -74,7 +78,7 @@ struct JobScriptRequest {
 };
 
 /// The job array's script: #SBATCH lines, then the task (`pdamp study task`). Throws
-/// InputError for a path that #SBATCH lines cannot hold (white space, quotes, '%').
+/// InputError for a shard folder #SBATCH lines cannot hold (checked_script_path).
 std::string job_script(const JobScriptRequest& request);
 
 }  // namespace pdamp::slurm

@@ -412,9 +412,9 @@ CREATE TABLE study_tasks (
 ) STRICT, WITHOUT ROWID;
 )sql";
 
-constexpr std::array<std::string_view, 9> all{
-    v1_runs_samples_cycles, v2_run_statistics,       v3_initial_states, v4_comparisons, v5_solid_fraction,
-    v6_run_ids_never_reused, v7_run_snapshots,       v8_studies,        v9_study_jobs};
+constexpr std::array<std::string_view, 9> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
+                                              v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused,
+                                              v7_run_snapshots,       v8_studies,        v9_study_jobs};
 
 }  // namespace
 

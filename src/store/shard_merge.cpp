@@ -13,15 +13,17 @@ namespace pdamp {
 namespace {
 
 /// The tables of a run's own rows, keyed by run_id and copied as they are.
-constexpr std::array<std::string_view, 4> run_tables{"samples", "cycles", "run_statistics", "calibrations"};
+constexpr std::array<std::string_view, 5> run_tables{"samples", "cycles", "run_statistics", "calibrations",
+                                                     "run_snapshots"};
 
-constexpr std::array<std::string_view, 14> merged{"initial_states",
+constexpr std::array<std::string_view, 15> merged{"initial_states",
                                                   "initial_particles",
                                                   "runs",
                                                   "samples",
                                                   "cycles",
                                                   "run_statistics",
                                                   "calibrations",
+                                                  "run_snapshots",
                                                   "comparisons",
                                                   "comparison_psi_bins",
                                                   "comparison_energy",

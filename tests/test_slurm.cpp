@@ -68,11 +68,11 @@ TEST_CASE("a study's shard folder names its files after the store, the study, th
 }
 
 TEST_CASE("the Slurm options are checked, naming the option and what is valid") {
-  for (const char* good : {"30", "30:00", "2:00:00", "1-12", "1-12:30", "1-0:30:00"}) {
+  for (const char* good : {"30", "30:00", "2:00:00", "1-12", "1-12:30", "1-0:30:00", "UNLIMITED", "infinite"}) {
     CAPTURE(good);
     CHECK(parse_time_limit(good) == good);
   }
-  for (const char* bad : {"", "1h", "2:00:00:00", "-5", "1-", "30 ", "1:2:3:4"}) {
+  for (const char* bad : {"", "1h", "2:00:00:00", "-5", "1-", "30 ", "1:2:3:4", "UNLIMITEDx", "never"}) {
     CAPTURE(bad);
     CHECK_THROWS_WITH_AS(parse_time_limit(bad), doctest::Contains("--time '"), InputError);
   }

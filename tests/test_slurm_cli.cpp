@@ -35,7 +35,7 @@ std::string read(const std::filesystem::path& file) {
 
 /// sbatch, squeue and sacct stand-ins first in PATH while it lives. sbatch records each job
 /// script and answers job ids from 100 on (or refuses while `refuse` exists); squeue lists
-/// nothing; sacct answers as a cluster without slurmdbd.
+/// nothing and sacct answers as a cluster without slurmdbd, unless given an answer.
 class FakeSlurm {
  public:
   explicit FakeSlurm(const TempDir& dir) : bin_(dir / "bin"), path_(std::getenv("PATH")) {
@@ -46,8 +46,11 @@ class FakeSlurm {
           "n=$(cat \"$0.next\" 2>/dev/null || echo 100)\necho $((n + 1)) > \"$0.next\"\n"
           "echo \"$2\" >> \"$0.scripts\"\necho \"$n\"\n",
           true);
-    write(bin_ / "squeue", "#!/bin/sh\nexit 0\n", true);
-    write(bin_ / "sacct", "#!/bin/sh\necho 'sacct: error: Slurm accounting storage is disabled' >&2\nexit 1\n", true);
+    write(bin_ / "squeue", "#!/bin/sh\necho \"$@\" >> \"$0.args\"\ncat \"$0.answer\" 2>/dev/null\nexit 0\n", true);
+    write(bin_ / "sacct",
+          "#!/bin/sh\nif [ -e \"$0.answer\" ]; then cat \"$0.answer\"; exit 0; fi\n"
+          "echo 'sacct: error: Slurm accounting storage is disabled' >&2\nexit 1\n",
+          true);
     setenv("PATH", (bin_.string() + ":" + path_).c_str(), 1);
   }
   ~FakeSlurm() { setenv("PATH", path_.c_str(), 1); }
@@ -61,6 +64,10 @@ class FakeSlurm {
     for (std::string line; std::getline(lines, line);) files.emplace_back(line);
     return files;
   }
+  /// What squeue or sacct prints from now on ("JOB|TASK|STATE" lines, "JOB_TASK|STATE" lines).
+  void answer(const std::string& program, const std::string& text) const { write(bin_ / (program + ".answer"), text); }
+  /// The arguments squeue was called with, a line per call.
+  std::string queue_questions() const { return read(bin_ / "squeue.args"); }
   void refuse(bool on) const {
     if (on) {
       write(bin_ / "sbatch.refuse", "");
@@ -203,6 +210,72 @@ TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bi
   CHECK(count_rows(db, "SELECT count(*) FROM study_points WHERE point = 3 AND attempt = 1") == 1);
 }
 
+TEST_CASE("status and --resume follow squeue and sacct, and collect reports the failed and the missing tasks") {
+  TempDir dir("slurm-states");
+  FakeSlurm slurm(dir);
+  // Points 1 and 2 fail: the hard engine reaches run.max_events long before 0.05 s.
+  const auto file = dir / "failing.ini";
+  write(file, "[study]\nname = failing\nscenario = " + scenario_file("small").string() +
+                  "\nmodels = hard\n[sweep]\nrun.max_events = 100, 10000000000\nhost.damping_N_s_m = 0.1, 0.2\n"
+                  "run.duration_s = 0.05\n");
+  const auto db = dir / "runs.sqlite";
+  const std::vector<std::string> status{"study", "status", "1", "--db", db.string()},
+      collect{"study", "collect", "1", "--db", db.string()},
+      resume{"study", "submit", "--resume", "1", "--slurm", "--db", db.string()};
+  REQUIRE(pdamp_cli({"study", "submit", file.string(), "--slurm", "--db", db.string()}, dir).code == 0);
+  const auto script = slurm.scripts().at(0);
+
+  // Queued and running tasks: status shows squeue's states, and nothing is submitted again.
+  slurm.answer("squeue", "100|1|RUNNING\n100|[2-4]|PENDING\n");
+  Result r = pdamp_cli(status, dir);
+  INFO(r.out << r.err);
+  CHECK(r.code == 0);
+  CHECK(contains(slurm.queue_questions(), "--name=pdamp-study-1 --format=%F|%K|%T"));
+  CHECK(contains(r.out, "study 1 'failing': 0 of 4 points completed, 1 jobs submitted"));
+  CHECK(contains(r.out, "task 1 of job 100 is RUNNING"));
+  CHECK(contains(r.out, "task 4 of job 100 is PENDING"));
+  r = pdamp_cli(resume, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.err, "study 1 has no point to submit: every point is completed or queued"));
+  CHECK(slurm.scripts().size() == 1);
+
+  // Tasks 1 to 3 ran (1 and 2 failing, exit 1), task 4 was cancelled before it started; the
+  // queue has forgotten them, accounting has not.
+  for (const int task : {1, 2, 3}) {
+    Process p = start_task(script, 100, task, dir);
+    CHECK(p.wait() == (task == 3 ? 0 : 1));
+  }
+  slurm.answer("squeue", "");
+  slurm.answer("sacct", "100_1|FAILED\n100_2|FAILED\n100_3|COMPLETED\n100_4|CANCELLED by 0\n");
+  r = pdamp_cli(collect, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "collected task 1 of job 100 (point 1, "));
+  CHECK(contains(r.out, "): failed, 1 runs, 1 beds added, 0 shared"));
+  for (const char* point : {"pdamp: point 1: failed in task 1 of job 100: run ", "pdamp: point 2: failed in task 2"}) {
+    CAPTURE(point);
+    CHECK(contains(r.out, point));
+  }
+  CHECK(contains(r.out, "run.max_events = 100 events"));
+  CHECK(contains(r.out,
+                 "pdamp: point 4: task 4 of job 100 left no shard: it never ran, or died before it could "
+                 "write one (log: " +
+                     (dir / "runs.sqlite.shards/study-1/logs/100_4.log").string() + ")"));
+  CHECK(contains(r.out, "study 1 'failing': 1 of 4 points completed; 3 shards collected now, 0 before"));
+  CHECK(count_rows(db, "SELECT count(*) FROM study_tasks WHERE outcome = 'failed' AND collected_at IS NOT NULL") == 2);
+
+  r = pdamp_cli(status, dir);
+  CHECK(contains(r.out, "COMPLETED"));
+  CHECK(contains(r.out, "task 4 of job 100 left no shard (Slurm: CANCELLED)"));
+  CHECK(!contains(r.out, "accounting storage is disabled"));
+
+  // The failed and the missing points are submitted again, not the completed one.
+  r = pdamp_cli(resume, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "3 points submitted as job 101 (array 1-2,4)"));
+  REQUIRE(slurm.scripts().size() == 2);
+  CHECK(array_line(slurm.scripts()[1]) == "#SBATCH --array=1-2,4");
+}
+
 TEST_CASE("submit checks everything before it writes: exit 2 with the reason, and a dry run writes nothing") {
   TempDir dir("slurm-submit");
   FakeSlurm slurm(dir);
@@ -220,6 +293,10 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
       {{study, "--slurm", "--time", "2h"}, "--time '2h': a time limit per task as Slurm takes it"},
       {{study, "--slurm", "--partition", "a b"}, "--partition 'a b'"},
       {{study, "--slurm", "--max-parallel", "0"}, "--max-parallel '0': must be a whole number from 1"},
+      {{study, "--slurm", "--max-parallel", "4x"}, "--max-parallel '4x'"},
+      {{study, "--slurm", "--account", "lab;rm"}, "--account 'lab;rm': an account name"},
+      {{study, "--slurm", "--partition", ""}, "--partition '': a partition name"},
+      {{study, "--slurm", "--threads", "0"}, "--threads '0'"},
       {{study, "--slurm", "--scratch", "$(id)"}, "--scratch '$(id)'"},
       {{(dir / "absent.ini").string(), "--slurm"}, "cannot be read (no such file)"},
       {{"--resume", "1", "--slurm"}, "does not exist"},
@@ -265,10 +342,13 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
   CHECK(r.code == 0);
   // A dry run of the stored study: what is left to submit, here every task, as none is in the
   // (empty) queue or left a shard.
+  const std::string stored = read(db);
   r = pdamp_cli({"study", "submit", "--resume", "1", "--slurm", "--dry-run", "--db", db.string()}, dir);
   CHECK(r.code == 0);
   CHECK(contains(r.out, "#SBATCH --array=1-4\n"));
   CHECK(slurm.scripts().size() == 1);
+  CHECK(read(db) == stored);
+  CHECK(!std::filesystem::exists(dir / "runs.sqlite.shards/study-1/submit-2.sh"));
 
   // Without sbatch: refused before anything is written.
   const auto other = dir / "other.sqlite";

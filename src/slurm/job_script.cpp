@@ -116,10 +116,11 @@ std::string parse_account(const std::string& text) {
 }
 
 std::string parse_time_limit(const std::string& text) {
-  static const std::regex valid("[0-9]{1,6}(:[0-9]{1,2}){0,2}|[0-9]{1,4}-[0-9]{1,2}(:[0-9]{1,2}){0,2}");
+  static const std::regex valid(
+      "[0-9]{1,6}(:[0-9]{1,2}){0,2}|[0-9]{1,4}-[0-9]{1,2}(:[0-9]{1,2}){0,2}|UNLIMITED|INFINITE", std::regex::icase);
   return checked(text, "--time", valid,
                  "a time limit per task as Slurm takes it: MINUTES, MINUTES:SECONDS, HOURS:MINUTES:SECONDS, "
-                 "DAYS-HOURS, DAYS-HOURS:MINUTES or DAYS-HOURS:MINUTES:SECONDS");
+                 "DAYS-HOURS, DAYS-HOURS:MINUTES, DAYS-HOURS:MINUTES:SECONDS, or UNLIMITED");
 }
 
 std::string parse_scratch(const std::string& text) {

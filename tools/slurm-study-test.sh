@@ -2,11 +2,14 @@
 # Integration test of studies on Slurm (issue 26) on a real single-node Slurm
 # (tools/slurm-local.sh): submits an 8-point study of data/scenarios/small.ini (both models
 # from one bed per point) as a job array of at most 2 tasks at once, cancels one task mid-run
-# (scancel), collects, resubmits the missing point with --resume, collects again, and checks
-# the store bit for bit against the same study run locally with `pdamp study run`: each
-# point's metrics, the models' agreement, and every column but ids and times of the latest
-# runs, their samples and cycles (doubles compared as their IEEE-754 bits). Then stops the
-# cluster and checks nothing of it is left. Prints the time from submit to collected.
+# (scancel: SIGTERM, the task stores its point as interrupted) and kills another (SIGKILL to
+# its processes, as a node that fails would: its shard is left unfinished), collects, resubmits the two points with
+# --resume, collects again, and checks the store bit for bit against the same study run
+# locally with `pdamp study run`: each point's metrics, the models' agreement, and every
+# column but ids and times of the latest runs, their samples and cycles (doubles compared as
+# their IEEE-754 bits). Prints the time from submit to collected.
+# Uses the local Slurm if `tools/slurm-local.sh start` started it, and leaves it running;
+# otherwise starts one, stops it at the end and checks nothing of it is left.
 # Needs root (or sudo), the packages tools/slurm-local.sh installs, and the ci build
 # (tools/build.sh ci), or PDAMP=/path/to/pdamp. Fails with a message if anything is missing.
 # Usage: tools/slurm-study-test.sh
@@ -18,7 +21,10 @@ source "$repo/tools/slurm-lib.sh"
 local_slurm=$repo/tools/slurm-local.sh
 pdamp=${PDAMP:-$repo/build/ci/src/pdamp}
 queue_timeout_s=300
-cancelled_point=2 # one of the long points (run.duration_s = 1.2)
+cancelled_point=2 # long points (run.duration_s = 1.2): SIGTERM mid-run
+killed_point=4    # SIGKILL mid-run
+own_cluster=1     # 0: a local Slurm started before, left running
+jobs=()           # the jobs submitted, cancelled if the test fails on a cluster it leaves running
 
 fail() {
   echo "slurm-study-test: FAIL: $*" >&2
@@ -31,7 +37,11 @@ on_exit() {
   if ((status != 0)) && [ -n "${SLURM_CONF:-}" ] && [ -f "$SLURM_CONF" ]; then
     squeue -r -t all >&2 || true
     [ -z "${work:-}" ] || tail -n 5 "$work"/runs.sqlite.shards/study-1/logs/*.log >&2 || true
-    "$local_slurm" stop >&2 || true
+    if ((own_cluster)); then
+      "$local_slurm" stop >&2 || true
+    elif ((${#jobs[@]})); then
+      scancel "${jobs[@]}" || true
+    fi
   fi
   [ -z "${work:-}" ] || rm -rf "$work"
 }
@@ -42,9 +52,13 @@ check_prerequisites() {
     fail "sqlite3 is missing and tools/setup.sh sqlite3 failed"
   [ "$(sqlite3 :memory: "SELECT hex(ieee754_to_blob(-0.0))")" = 8000000000000000 ] ||
     fail "this sqlite3 lacks ieee754_to_blob, which the bit-for-bit comparison needs"
-  if "$local_slurm" status >/dev/null 2>&1; then
-    fail "a local Slurm is already running (tools/slurm-local.sh status); stop it first"
-  fi
+  local status=0 output
+  output=$("$local_slurm" status 2>&1) || status=$?
+  case $status in
+    0) own_cluster=0 ;;
+    3) ;;
+    *) fail "tools/slurm-local.sh status: $(tail -n 1 <<<"$output")" ;; # partly running, or no root
+  esac
 }
 
 # 8 points: four host dampings, each for a short and a long run.
@@ -61,11 +75,14 @@ run.duration_s = 0.15, 1.2
 EOF
 }
 
+# Starts the local Slurm, or finds the one running; either prints its SLURM_CONF line.
 start_cluster() {
-  local output
-  output=$("$local_slurm" start) || fail "tools/slurm-local.sh start failed"
+  local output command=start
+  ((own_cluster)) || command=status
+  output=$("$local_slurm" "$command") || fail "tools/slurm-local.sh $command failed"
   eval "$(grep '^export SLURM_CONF=' <<<"$output")"
-  [ -f "${SLURM_CONF:-}" ] || fail "start printed no usable SLURM_CONF line: $output"
+  [ -f "${SLURM_CONF:-}" ] || fail "$command printed no usable SLURM_CONF line: $output"
+  ((own_cluster)) || say "using the local Slurm already running ($SLURM_CONF); it is left running"
 }
 
 # Runs pdamp; the output also goes to the test's output.
@@ -87,9 +104,9 @@ job_done() {
   [ -z "$(squeue -h -j "$1" -t PENDING,RUNNING,CONFIGURING,COMPLETING,SUSPENDED 2>/dev/null)" ]
 }
 
-# The task's log shows it running the soft model, past settling.
+# The log of task $2 of job $1 shows it running the soft model, past settling.
 task_computing() {
-  grep -q "soft" "$work/runs.sqlite.shards/study-1/logs/${1}_$cancelled_point.log" 2>/dev/null
+  grep -q "soft" "$work/runs.sqlite.shards/study-1/logs/${1}_$2.log" 2>/dev/null
 }
 
 # Each row of a query on the latest runs of a point, as text with doubles as their bits, in
@@ -145,25 +162,44 @@ submit_and_cancel() {
   run_pdamp study submit "$work/study.ini" --slurm --max-parallel 2 --time 10 || fail "study submit failed"
   expect_output "8 points submitted as job"
   job=$(submitted_job)
+  jobs+=("$job")
   grep -qx "#SBATCH --array=1-8%2" "$work/runs.sqlite.shards/study-1/submit-1.sh" || fail "the job script's array is not 1-8%2"
-  wait_for "task $cancelled_point of job $job to compute" "$queue_timeout_s" task_computing "$job"
+  wait_for "task $cancelled_point of job $job to compute" "$queue_timeout_s" task_computing "$job" "$cancelled_point"
   scancel "${job}_$cancelled_point"
   say "cancelled task $cancelled_point of job $job mid-run"
+  wait_for "task $killed_point of job $job to compute" "$queue_timeout_s" task_computing "$job" "$killed_point"
+  kill_task "$job" "$killed_point"
+  say "killed task $killed_point of job $job mid-run"
   wait_for "job $job to end" "$queue_timeout_s" job_done "$job"
   first_job=$job
+}
+
+# SIGKILL to the processes of task $2 of job $1, which Slurm lists by the task's own job id.
+# (scancel --signal=KILL cancels as scancel does: SIGTERM first, and the task ends cleanly.)
+kill_task() {
+  local id pids
+  id=$(squeue -h -j "${1}_$2" -o %A)
+  [[ "$id" =~ ^[0-9]+$ ]] || fail "squeue does not know task $2 of job $1: '$id'"
+  pids=$(scontrol listpids "$id" | awk 'NR > 1 && $3 == "batch" { print $1 }' | paste -sd' ')
+  [ -n "$pids" ] || fail "scontrol listpids $id lists no processes of task $2 of job $1"
+  # shellcheck disable=SC2086 # one argument per PID
+  kill -KILL $pids
 }
 
 collect_and_resume() {
   local job
   run_pdamp study status 1 || fail "study status failed"
+  expect_output "task $killed_point of job $first_job left an unfinished shard"
   run_pdamp study collect 1 || fail "study collect failed"
-  expect_output "7 of 8 points completed;"
-  # The cancelled task either stored its point as interrupted (SIGTERM) or was killed first.
-  grep -qE "collected task $cancelled_point of job $first_job .*: interrupted|point $cancelled_point: task $cancelled_point of job $first_job left an unfinished shard" "$work/last.out" ||
-    fail "collect does not report the cancelled task $cancelled_point"
+  expect_output "6 of 8 points completed;"
+  expect_output "collected task $cancelled_point of job $first_job (point $cancelled_point, "
+  expect_output "pdamp: point $cancelled_point: interrupted in task $cancelled_point of job $first_job: run "
+  expect_output "pdamp: point $killed_point: task $killed_point of job $first_job left an unfinished shard: it was killed while running"
   run_pdamp study submit --resume 1 --slurm --time 10 || fail "study submit --resume failed"
-  expect_output "1 points submitted as job"
+  expect_output "2 points submitted as job"
   job=$(submitted_job)
+  jobs+=("$job")
+  expect_output "(array $cancelled_point,$killed_point)"
   wait_for "job $job to end" "$queue_timeout_s" job_done "$job"
   run_pdamp study collect 1 || fail "the second study collect failed"
   expect_output "8 of 8 points completed"
@@ -173,6 +209,7 @@ collect_and_resume() {
 
 stop_cluster() {
   local folder
+  ((own_cluster)) || return 0
   folder=$(dirname "$SLURM_CONF")
   "$local_slurm" stop >/dev/null || fail "tools/slurm-local.sh stop failed"
   [ ! -e "$folder" ] || fail "stop left $folder"

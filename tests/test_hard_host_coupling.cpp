@@ -220,10 +220,11 @@ TEST_CASE("books: the host's damping and excitation booked in stretches add up t
   // An observation adds what the trajectory did since the last booking.
   HardLedger booked(0);
   booked.book_host(trajectory, 0.04, none);
-  EnergyLedger observed;
+  Observation observed;
   booked.write_to(observed, trajectory, 0.1, none);
-  CHECK(observed.dissipated_viscous_J == doctest::Approx(whole.viscous_J).epsilon(1e-12));
-  CHECK(observed.excitation_work_J == doctest::Approx(whole.excitation_J).epsilon(1e-12));
+  CHECK(observed.energy.dissipated_viscous_J == doctest::Approx(whole.viscous_J).epsilon(1e-12));
+  CHECK(observed.energy.excitation_work_J == doctest::Approx(whole.excitation_J).epsilon(1e-12));
+  CHECK(observed.host_load.z_m_s == doctest::Approx(whole.load.value().z_m_s).epsilon(1e-12));
 }
 
 TEST_CASE("books: a prescribed host's work on its riders is the change of their energy that moves with it") {

@@ -159,7 +159,7 @@ TEST_CASE("jam sticking: a merged wedge held by a cap sticks to a free host, mom
     const double vertical_J = 0.5 * (3 * mass_kg) * host_mass_kg / (3 * mass_kg + host_mass_kg) *
                               (body_vz - host_v_m_s) * (body_vz - host_v_m_s);
     const double e0 = test::kinetic_energy(p) + 0.5 * host_mass_kg * host_v_m_s * host_v_m_s;
-    const double after = jams.stick_to_host(cluster, {0.0, host_v_m_s}, false, host_mass_kg, p, ledger);
+    const double after = jams.stick_to_host(cluster, {0.0, host_v_m_s}, false, host_mass_kg, p, ledger).host_v_m_s;
     CHECK(host_mass_kg * after + test::momentum(p).z() == doctest::Approx(vertical0).epsilon(1e-15));
     for (int i = 0; i < 3; ++i) {
       CHECK(p.velocity_m_s.col(i) == Eigen::Vector3d(0, 0, after));
@@ -187,7 +187,7 @@ TEST_CASE("jam sticking: a prescribed host keeps its velocity and does the work 
   jams.merge_rigidly(cluster, p, ledger);
   const double e0 = test::kinetic_energy(p);
   const HardLedger merged = ledger;
-  const double after = jams.stick_to_host(cluster, {0.0, 0.3}, true, 0.0, p, ledger);
+  const double after = jams.stick_to_host(cluster, {0.0, 0.3}, true, 0.0, p, ledger).host_v_m_s;
   CHECK(after == 0.3);
   const double loss = ledger.impact_J - merged.impact_J + ledger.friction_J - merged.friction_J;
   CHECK(test::kinetic_energy(p) - e0 == doctest::Approx(ledger.excitation_J - loss).epsilon(1e-12));

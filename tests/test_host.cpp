@@ -128,8 +128,9 @@ TEST_CASE("energy: viscous dissipation and excitation work balance the host's en
     };
     double dissipated = 0.0, work = 0.0;
     for (double t = 0.0; t < 1.5; t += 0.0371) {  // piecewise, as an engine integrates between events
-      dissipated += trajectory.viscous_dissipation_J(t, t + 0.0371);
-      work += trajectory.excitation_work_J(t, t + 0.0371);
+      const HostTrajectory::Stretch stretch = trajectory.stretch(t, t + 0.0371, 0.0, 0.0);
+      dissipated += stretch.viscous_J;
+      work += stretch.excitation_J;
     }
     const double t_end = 0.0371 * std::ceil(1.5 / 0.0371);
     const double residual = energy(0.0) + work - energy(t_end) - dissipated;
@@ -183,5 +184,5 @@ TEST_CASE("a prescribed host follows A sin(wt + phi) exactly") {
     CHECK(trajectory.acceleration_m_s2(t) == doctest::Approx(-0.002 * w * w * std::sin(w * t + 0.5)).epsilon(1e-14));
   }
   CHECK(model.has_infinite_mass());
-  CHECK(trajectory.viscous_dissipation_J(0, 1) == 0.0);
+  CHECK(trajectory.stretch(0, 1, 0.0, 0.0).viscous_J == 0.0);
 }

@@ -20,15 +20,10 @@
 #include "test_support.hpp"
 
 using namespace pdamp;
+using test::HardModel;
+using test::SoftModel;
 
 namespace {
-
-struct SoftModel {
-  static constexpr Model model = Model::soft;
-};
-struct HardModel {
-  static constexpr Model model = Model::hard;
-};
 
 constexpr double lead_kg_m3 = 9000.0;
 constexpr double radius_m = 0.0005;

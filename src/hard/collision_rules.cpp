@@ -99,10 +99,12 @@ VerticalSticking stick_vertically(double mass_kg, double vz_m_s, double host_v_m
                                   double carried_mass_kg) {
   const double relative_vz = vz_m_s - host_v_m_s;
   if (prescribed) {
-    return {0.5 * mass_kg * relative_vz * relative_vz, host_v_m_s, mass_kg * (host_v_m_s - vz_m_s) * host_v_m_s};
+    return {0.5 * mass_kg * relative_vz * relative_vz, host_v_m_s, mass_kg * (host_v_m_s - vz_m_s) * host_v_m_s,
+            mass_kg * (host_v_m_s - vz_m_s)};
   }
-  return {0.5 * mass_kg * carried_mass_kg / (mass_kg + carried_mass_kg) * relative_vz * relative_vz,
-          (carried_mass_kg * host_v_m_s + mass_kg * vz_m_s) / (carried_mass_kg + mass_kg)};
+  const double host_v_after_m_s = (carried_mass_kg * host_v_m_s + mass_kg * vz_m_s) / (carried_mass_kg + mass_kg);
+  return {0.5 * mass_kg * carried_mass_kg / (mass_kg + carried_mass_kg) * relative_vz * relative_vz, host_v_after_m_s,
+          0.0, mass_kg * (host_v_after_m_s - vz_m_s)};
 }
 
 Eigen::Vector2d turned_along_side_wall(const Eigen::Vector2d& v, const Eigen::Vector2d& outward,

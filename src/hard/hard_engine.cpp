@@ -18,7 +18,7 @@ const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 
 HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const RestitutionTable* calibration)
     : flight_(scenario, initial),
-      books_(static_cast<int>(initial.size())),
+      books_(static_cast<int>(initial.size()), HostModel(scenario).excitation_phase()),
       host_(scenario, initial, flight_, books_),
       jams_(static_cast<int>(initial.size())),
       laws_(scenario, calibration),
@@ -128,7 +128,7 @@ Observation HardEngine::observe() const {
   model.write_energy_to(e, t_s_, o.host);
   // Everything is booked up to t_s_ after advance_to; the books add the rest for an
   // observation taken before the first advance.
-  books_.write_to(e, host_.trajectory(), t_s_, host_.riders());
+  books_.write_to(o, host_.trajectory(), t_s_, host_.riders());
   o.counters.events = collisions();
   o.counters.contacts = host_.riding_count();
   return o;
@@ -291,10 +291,11 @@ void HardEngine::merge_jam(int i) {
   jams_.merge_rigidly(cluster, flight_.particles(), books_);
   if (cluster.hold) {
     const HostState host = host_.now(t_s_);
-    const double host_v_m_s =
+    const VerticalSticking stuck =
         jams_.stick_to_host(cluster, host, host_.prescribed(), host_.carried_mass_kg(), flight_.particles(), books_);
+    host_.take_impulse(-stuck.body_impulse_N_s, t_s_);
     for (const int k : cluster.members) host_.leave_sets(k);
-    if (host_v_m_s != host.v_m_s) restart_host({host.z_m, host_v_m_s});
+    if (stuck.host_v_m_s != host.v_m_s) restart_host({host.z_m, stuck.host_v_m_s});
     ++books_.counts.jam_stuck_to_host;
   }
   ++books_.counts.jam_merges;
@@ -312,6 +313,7 @@ void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const Colli
   books_.book(out, i, rider);
   flight_.new_trajectory(i);
   host_.leave_sets(i);
+  host_.take_impulse(-p.z(), t_s_);
   if (host_.prescribed()) {
     books_.excitation_J += p.z() * host.v_m_s;  // the wall's work on the sphere
   } else if (p.z() != 0.0) {

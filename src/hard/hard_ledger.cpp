@@ -30,26 +30,32 @@ EngineStatistics HardStatistics::named() const {
           {"prediction_rebuilds", rebuilds}};
 }
 
-void HardLedger::add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J,
+void HardLedger::add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J, HostLoadBooks& load_sums,
                                        const HostTrajectory& trajectory, double t_s, const Riders& riders) const {
-  viscous_sum_J += trajectory.viscous_dissipation_J(t_host_booked_s_, t_s);
-  excitation_sum_J += trajectory.excitation_work_J(t_host_booked_s_, t_s);
+  const HostTrajectory::Stretch stretch =
+      trajectory.stretch(t_host_booked_s_, t_s, riders.mass_kg, riders.gravity_z_m_s2);
+  viscous_sum_J += stretch.viscous_J;
+  excitation_sum_J += stretch.excitation_J;
   if (riders.carried_by_prescribed_host) {
     excitation_sum_J += riders.energy_J(trajectory.at(t_s)) - riders.energy_J(trajectory.at(t_host_booked_s_));
   }
+  load_sums.add(stretch.load);
 }
 
 void HardLedger::book_host(const HostTrajectory& trajectory, double t_s, const Riders& riders) {
-  add_host_since_booked(viscous_J, excitation_J, trajectory, t_s, riders);
+  add_host_since_booked(viscous_J, excitation_J, load, trajectory, t_s, riders);
   t_host_booked_s_ = t_s;
 }
 
-void HardLedger::write_to(EnergyLedger& e, const HostTrajectory& trajectory, double t_s, const Riders& riders) const {
+void HardLedger::write_to(Observation& o, const HostTrajectory& trajectory, double t_s, const Riders& riders) const {
+  EnergyLedger& e = o.energy;
   e.dissipated_impact_J = impact_J;
   e.dissipated_friction_J = friction_J;
   e.dissipated_viscous_J = viscous_J;
   e.excitation_work_J = excitation_J;
-  add_host_since_booked(e.dissipated_viscous_J, e.excitation_work_J, trajectory, t_s, riders);
+  HostLoadBooks load_now = load;
+  add_host_since_booked(e.dissipated_viscous_J, e.excitation_work_J, load_now, trajectory, t_s, riders);
+  o.host_load = load_now.value();
 }
 
 }  // namespace pdamp::hard

@@ -116,6 +116,7 @@ HostCoupling::Attached HostCoupling::attach(int i, int side, double t_s) {
       0.5 * m * (v.x() * v.x() + v.y() * v.y()) +
       0.5 * particles.moment_of_inertia(i) * particles.angular_velocity_rad_s.col(i).squaredNorm();
   const VerticalSticking sticking = stick_vertically(m, v.z(), host.v_m_s, prescribed(), carried_mass_kg());
+  take_impulse(-sticking.body_impulse_N_s, t_s);
   ledger_.friction_J += friction_J;
   ledger_.impact_J += sticking.loss_J;
   ledger_.book_sphere(i, sticking.loss_J, friction_J);

@@ -109,8 +109,9 @@ void JamResolver::merge_rigidly(const Cluster& cluster, PackedParticles& particl
   ledger.friction_J += (1.0 - impact_share) * loss;
 }
 
-double JamResolver::stick_to_host(const Cluster& cluster, const HostState& host, bool prescribed,
-                                  double carried_mass_kg, PackedParticles& particles, HardLedger& ledger) const {
+VerticalSticking JamResolver::stick_to_host(const Cluster& cluster, const HostState& host, bool prescribed,
+                                            double carried_mass_kg, PackedParticles& particles,
+                                            HardLedger& ledger) const {
   const std::vector<int>& members = cluster.members;
   double mass = 0.0;
   Eigen::Vector3d momentum = Eigen::Vector3d::Zero();
@@ -142,7 +143,7 @@ double JamResolver::stick_to_host(const Cluster& cluster, const HostState& host,
     particles.velocity_m_s.col(k) = vertical.host_v_m_s * Eigen::Vector3d::UnitZ();
     particles.angular_velocity_rad_s.col(k).setZero();
   }
-  return vertical.host_v_m_s;
+  return vertical;
 }
 
 }  // namespace pdamp::hard

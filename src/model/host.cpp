@@ -208,30 +208,46 @@ double HostTrajectory::acceleration_m_s2(double t_s, const HostState& state) con
   return (model_->force_N(t_s, state) + model_->stiffness_N_m() * offset_m_) / mass_kg_;
 }
 
-template <class Integrand>
-double HostTrajectory::integrate(double from_s, double to_s, Integrand f) const {
-  if (to_s <= from_s) return 0.0;
+template <std::size_t N, class Integrand>
+std::array<double, N> HostTrajectory::integrate(double from_s, double to_s, Integrand f) const {
+  std::array<double, N> sum{};
+  if (to_s <= from_s) return sum;
   const double span = to_s - from_s;
   const auto panels = static_cast<long>(std::ceil(span * fastest_rate_1_s_)) + 1;
   const double h = span / static_cast<double>(panels);
-  double sum = 0.0;
   for (long p = 0; p < panels; ++p) {
     const double mid = from_s + (static_cast<double>(p) + 0.5) * h;
-    double panel = 0.0;
-    for (std::size_t i = 0; i < gl_nodes.size(); ++i) panel += gl_weights[i] * f(mid + 0.5 * h * gl_nodes[i]);
-    sum += 0.5 * h * panel;
+    std::array<double, N> panel{};
+    for (std::size_t i = 0; i < gl_nodes.size(); ++i) {
+      const std::array<double, N> value = f(mid + 0.5 * h * gl_nodes[i]);
+      for (std::size_t k = 0; k < N; ++k) panel[k] += gl_weights[i] * value[k];
+    }
+    for (std::size_t k = 0; k < N; ++k) sum[k] += 0.5 * h * panel[k];
   }
   return sum;
 }
 
-double HostTrajectory::viscous_dissipation_J(double from_s, double to_s) const {
-  if (model_->has_infinite_mass() || model_->damping_N_s_m() == 0.0) return 0.0;
-  return integrate(from_s, to_s, [this](double t) { return model_->viscous_power_W(t, at(t).v_m_s); });
-}
-
-double HostTrajectory::excitation_work_J(double from_s, double to_s) const {
-  if (model_->mode() != ExcitationMode::base_motion && model_->mode() != ExcitationMode::force) return 0.0;
-  return integrate(from_s, to_s, [this](double t) { return model_->excitation_power_W(t, at(t)); });
+HostTrajectory::Stretch HostTrajectory::stretch(double from_s, double to_s, double riding_mass_kg,
+                                                double gravity_z_m_s2) const {
+  const bool viscous = !model_->has_infinite_mass() && model_->damping_N_s_m() != 0.0;
+  const bool driven = model_->mode() == ExcitationMode::base_motion || model_->mode() == ExcitationMode::force;
+  const bool own = !model_->has_infinite_mass();
+  const ExcitationPhase phase = model_->excitation_phase();
+  const std::array<double, 9> sums = integrate<9>(from_s, to_s, [&](double t) {
+    const HostState s = at(t);
+    const ExcitationPhase::Weights w = phase.at(t);
+    const double riders_N = riding_mass_kg > 0.0 ? riding_mass_kg * (gravity_z_m_s2 - acceleration_m_s2(t, s)) : 0.0;
+    return std::array<double, 9>{viscous ? model_->viscous_power_W(t, s.v_m_s) : 0.0,
+                                 driven ? model_->excitation_power_W(t, s) : 0.0,
+                                 riders_N,
+                                 riders_N * w.sin,
+                                 riders_N * w.cos,
+                                 own ? model_->force_N(t, s) : 0.0,
+                                 s.z_m,
+                                 s.z_m * w.sin,
+                                 s.z_m * w.cos};
+  });
+  return {sums[0], sums[1], {sums[2], sums[3], sums[4], sums[5], sums[6], sums[7], sums[8]}};
 }
 
 }  // namespace pdamp

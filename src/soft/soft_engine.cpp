@@ -167,6 +167,7 @@ SoftEngine::SoftEngine(const Scenario& scenario, const Particles& initial, SoftE
 
   host_ = host_model_.initial_state();
   if (options_.hold_host) host_.v_m_s = 0.0;
+  host_load_ = HostLoadBooks(host_model_.excitation_phase());
 
   refresh_neighbours();
   compute_forces(0.0);
@@ -466,7 +467,7 @@ void SoftEngine::compute_forces(double dt_s) {
       max_overlap_time_s_ = t_s_;
     }
   }
-  add_host_forces();
+  add_host_forces(dt_s);
 }
 
 template <class Real>
@@ -760,19 +761,22 @@ void SoftEngine::add_reactions() {
   }
 }
 
-void SoftEngine::add_host_forces() {
+void SoftEngine::add_host_forces(double dt_s) {
   if (options_.hold_host) return;
   // The forces act at the end of the step (the damper on the half-step velocity, as the
   // contacts' dashpots); the books take the trapezoid of each over the step's displacements.
   const double y = host_model_.base_position_m(t_s_);
+  host_other_force_N_ = host_model_.force_N(t_s_, host_);
   const HostForces now{host_.z_m - y,
                        host_.v_m_s - host_model_.base_velocity_m_s(t_s_),
                        host_model_.applied_force_N(t_s_),
                        host_particle_force_N_,
                        host_.z_m,
-                       y};
-  host_other_force_N_ = host_model_.force_N(t_s_, host_);
+                       y,
+                       host_model_.has_infinite_mass() ? 0.0 : host_other_force_N_,
+                       host_load_.phase().at(t_s_)};
   const HostForces& before = previous_host_forces_;
+  book_host_load(before, now, dt_s);
   const double dz = now.z_m - before.z_m, dy = now.base_m - before.base_m;
   if (host_model_.has_infinite_mass()) {
     // The walls' prescribed motion does work on the particles: the reaction of the
@@ -786,6 +790,19 @@ void SoftEngine::add_host_forces() {
                                  (0.5 * k * (before.stretch_m + now.stretch_m) + mean_damper_N) * dy;
   }
   previous_host_forces_ = now;
+}
+
+void SoftEngine::book_host_load(const HostForces& before, const HostForces& now, double dt_s) {
+  // The kicks give the host ½ dt (F_before + F_now) over a step: the trapezoid, whose
+  // weighted integrals take each end's weight (dt the kicks' own, not a difference of times).
+  const double half_dt = 0.5 * dt_s;
+  auto trapezoid = [&](double at_before, double at_now) { return half_dt * (at_before + at_now); };
+  const ExcitationPhase::Weights &wb = before.weights, &wn = now.weights;
+  host_load_.add({trapezoid(before.particles_N, now.particles_N),
+                  trapezoid(before.particles_N * wb.sin, now.particles_N * wn.sin),
+                  trapezoid(before.particles_N * wb.cos, now.particles_N * wn.cos), trapezoid(before.own_N, now.own_N),
+                  trapezoid(before.z_m, now.z_m), trapezoid(before.z_m * wb.sin, now.z_m * wn.sin),
+                  trapezoid(before.z_m * wb.cos, now.z_m * wn.cos)});
 }
 
 double SoftEngine::host_acceleration_m_s2() const {
@@ -814,6 +831,7 @@ Observation SoftEngine::observe() const {
   particle_energies().write_to(o.energy);
   host_model_.write_energy_to(o.energy, t_s_, host_);
   o.energy.contact_elastic_J = contact_elastic_J_;
+  o.host_load = host_load_.value();
   o.counters.steps = steps_;
   o.counters.contacts = contacts_;
   return o;

@@ -80,9 +80,10 @@ class ContactLaws {
 /// direction the host moves in: what it loses, where the host goes, and the work a
 /// prescribed host does on it.
 struct VerticalSticking {
-  double loss_J;           ///< kinetic energy of the vertical relative motion that stops
-  double host_v_m_s;       ///< the host's (and the body's) vertical velocity after
-  double host_work_J = 0;  ///< a prescribed host's work on the body (its velocity is kept)
+  double loss_J;                ///< kinetic energy of the vertical relative motion that stops
+  double host_v_m_s;            ///< the host's (and the body's) vertical velocity after
+  double host_work_J = 0;       ///< a prescribed host's work on the body (its velocity is kept)
+  double body_impulse_N_s = 0;  ///< the body's vertical momentum change (the host and its riders take the opposite)
 };
 /// A body of `mass_kg` moving at `vz_m_s` sticks to a host moving at `host_v_m_s`: a free
 /// host moving `carried_mass_kg` in all (its own and its riders') shares its momentum; a

@@ -5,7 +5,9 @@
 /// Collisions book their losses as they happen. The host's damper and its excitation act
 /// all the time: they are booked in closed form over each stretch of one host trajectory,
 /// whenever the trajectory ends (an impulse, a change of riding mass) and at the end of
-/// every advance; an observation adds what the current trajectory did since.
+/// every advance; an observation adds what the current trajectory did since. The host's
+/// load integrals likewise: the riding bed's load m_r (g_z − z'') and z(t) over each
+/// stretch, and the impulses the host takes as they happen (HostCoupling::take_impulse).
 
 #include <array>
 #include <cstdint>
@@ -47,14 +49,16 @@ struct Riders {
 
 class HardLedger {
  public:
-  /// Books for `particle_count` spheres.
-  explicit HardLedger(int particle_count)
-      : by_sphere{Eigen::VectorXd::Zero(particle_count), Eigen::VectorXd::Zero(particle_count)} {}
+  /// Books for `particle_count` spheres, the harmonic integrals weighted at `phase`.
+  explicit HardLedger(int particle_count, ExcitationPhase phase = {})
+      : by_sphere{Eigen::VectorXd::Zero(particle_count), Eigen::VectorXd::Zero(particle_count)}, load(phase) {}
 
   /// Booked so far (J).
   double impact_J = 0.0, friction_J = 0.0, viscous_J = 0.0, excitation_J = 0.0;
   /// The impact and friction losses by sphere (Engine::dissipation_by_sphere).
   SphereDissipation by_sphere;
+  /// The host's load integrals booked so far.
+  HostLoadBooks load;
   HardStatistics counts;
 
   /// A collision's loss: all of it sphere i's (against a wall), or half each i's and j's
@@ -77,14 +81,15 @@ class HardLedger {
   /// The host's damper and excitation on `trajectory` from the last booking to t_s, with
   /// `riders` on it.
   void book_host(const HostTrajectory& trajectory, double t_s, const Riders& riders);
-  /// The dissipation and the excitation's work into `e`, as at t_s on `trajectory` (what
-  /// was booked, and the trajectory since the last booking).
-  void write_to(EnergyLedger& e, const HostTrajectory& trajectory, double t_s, const Riders& riders) const;
+  /// The dissipation and the excitation's work into `o.energy`, the load integrals into
+  /// `o.host_load`, as at t_s on `trajectory` (what was booked, and the trajectory since
+  /// the last booking).
+  void write_to(Observation& o, const HostTrajectory& trajectory, double t_s, const Riders& riders) const;
 
  private:
   /// Adds what the host did on `trajectory` from the last booking to t_s.
-  void add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J, const HostTrajectory& trajectory,
-                             double t_s, const Riders& riders) const;
+  void add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J, HostLoadBooks& load_sums,
+                             const HostTrajectory& trajectory, double t_s, const Riders& riders) const;
 
   double t_host_booked_s_ = 0.0;
 };

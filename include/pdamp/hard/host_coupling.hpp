@@ -75,6 +75,15 @@ class HostCoupling {
   /// The mass the host's velocity stands for besides a sphere's: its own and the riders'.
   double carried_mass_kg() const { return model_.mass_kg() + riding_mass_kg_; }
   double inverse_mass_1_kg() const { return prescribed() ? 0.0 : 1.0 / carried_mass_kg(); }
+  /// The host and its riders take a vertical impulse from a sphere or a cluster at t_s
+  /// (N·s): the host's own share, the rest moving the riders with it (all of it for a
+  /// prescribed host, which carries the riders whatever they weigh), into the load books.
+  /// Call it before the host restarts and before the riding mass changes.
+  void take_impulse(double on_carried_N_s, double t_s) {
+    if (on_carried_N_s == 0.0) return;
+    ledger_.load.add_impulse(prescribed() ? on_carried_N_s : on_carried_N_s * model_.mass_kg() / carried_mass_kg(),
+                             t_s);
+  }
   /// Books the trajectory from the last booking to t_s (with the riding mass it had).
   void book(double t_s) { ledger_.book_host(trajectory_, t_s, riders()); }
   Riders riders() const { return {riding_mass_kg_, gravity_m_s2_.z(), prescribed()}; }

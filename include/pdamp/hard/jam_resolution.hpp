@@ -57,12 +57,12 @@ class JamResolver {
   /// A perfectly inelastic, sticking collision of the merged cluster with the host at
   /// `host` (a prescribed one, or a free one carrying `carried_mass_kg` in all): the host
   /// takes the body's vertical momentum, the walls (fixed horizontally) its horizontal
-  /// momentum and its spin, and every sphere leaves with the host's velocity after, which
-  /// it returns. The loss is impact where it is normal to a holding wall (the horizontal
-  /// part at the side wall, the vertical part at a cap or the bed) and friction otherwise,
+  /// momentum and its spin, and every sphere leaves with the host's velocity after. Returns
+  /// the vertical collision (the host's velocity after, the body's impulse). The loss is impact where it is normal to a
+  /// holding wall (the horizontal part at the side wall, the vertical part at a cap or the bed) and friction otherwise,
   /// the spin included.
-  double stick_to_host(const Cluster& cluster, const HostState& host, bool prescribed, double carried_mass_kg,
-                       PackedParticles& particles, HardLedger& ledger) const;
+  VerticalSticking stick_to_host(const Cluster& cluster, const HostState& host, bool prescribed, double carried_mass_kg,
+                                 PackedParticles& particles, HardLedger& ledger) const;
 
  private:
   /// note_collision's record of one collision in the spheres' counts, partners and holds.

@@ -9,7 +9,11 @@
 /// `HostTrajectory` is the exact closed-form motion between particle impulses, for the
 /// event-driven engine and for runs without particles.
 
+#include <array>
+#include <cstddef>
+
 #include "pdamp/model/energy_ledger.hpp"
+#include "pdamp/model/host_load.hpp"
 #include "pdamp/scenario/scenario.hpp"
 
 namespace pdamp {
@@ -29,6 +33,8 @@ class HostModel {
   bool has_infinite_mass() const { return mode_ == ExcitationMode::prescribed_motion; }
   ExcitationMode mode() const { return mode_; }
   double angular_frequency_rad_s() const { return omega_; }
+  /// ω and φ of the excitation, whose sin(ωt + φ) and cos(ωt + φ) weight the harmonic integrals.
+  ExcitationPhase excitation_phase() const { return {omega_, phase_rad_}; }
   /// √(K/M): the undamped angular frequency of the host alone (rad/s).
   double natural_angular_frequency_rad_s() const;
   /// A of the base or prescribed motion (m).
@@ -92,15 +98,21 @@ class HostTrajectory {
   /// A bound on |z'''| for every t ≥ t0, from the equation of motion and the bounds above.
   double jerk_bound_m_s3() const { return jerk_bound_; }
 
-  /// ∫ C (z' − y')² dt over [from, to] ⊂ [t0, ∞), exact to round-off (Gauss–Legendre
-  /// on panels far shorter than every time scale of the integrand, which is analytic).
-  double viscous_dissipation_J(double from_s, double to_s) const;
-  /// ∫ excitation power dt over [from, to] (see HostModel::excitation_power_W).
-  double excitation_work_J(double from_s, double to_s) const;
+  /// What the host did over [from, to] ⊂ [t0, ∞): ∫ C (z' − y')² dt (the damper's loss),
+  /// ∫ excitation power dt (HostModel::excitation_power_W), and its load integrals, with
+  /// spheres of `riding_mass_kg` riding on it that load it with m_r (g_z − z'') (g_z:
+  /// `gravity_z_m_s2`). Exact to round-off: Gauss–Legendre on panels far shorter than every
+  /// time scale of the integrands, which are analytic; one pass for all of them.
+  struct Stretch {
+    double viscous_J = 0.0, excitation_J = 0.0;
+    HostLoadIntegrals load;
+  };
+  Stretch stretch(double from_s, double to_s, double riding_mass_kg, double gravity_z_m_s2) const;
 
  private:
-  template <class Integrand>
-  double integrate(double from_s, double to_s, Integrand f) const;
+  /// ∫ f dt over [from, to] for each of f's N components.
+  template <std::size_t N, class Integrand>
+  std::array<double, N> integrate(double from_s, double to_s, Integrand f) const;
 
   const HostModel* model_;
   double t0_s_;

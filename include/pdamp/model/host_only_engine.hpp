@@ -24,6 +24,7 @@ class HostOnlyEngine final : public Engine {
   double t_s_ = 0.0;
   double viscous_J_ = 0.0;
   double excitation_J_ = 0.0;
+  HostLoadBooks load_;
 };
 
 }  // namespace pdamp

@@ -5,6 +5,7 @@
 
 #include "pdamp/model/energy_ledger.hpp"
 #include "pdamp/model/host.hpp"
+#include "pdamp/model/host_load.hpp"
 #include "pdamp/model/particles.hpp"
 
 namespace pdamp {
@@ -15,12 +16,13 @@ struct EngineCounters {
   std::int64_t contacts = 0;  ///< contacts open at this instant
 };
 
-/// A cheap look at an engine: host, energy ledger, counters. Taken many times per
-/// host cycle for the cycle analysis, so it never copies the particles.
+/// A cheap look at an engine: host, energy ledger, the host's load integrals, counters.
+/// Taken many times per host cycle for the cycle analysis, so it never copies the particles.
 struct Observation {
   double t_s = 0.0;
   HostState host;
   EnergyLedger energy;
+  HostLoadIntegrals host_load;  ///< cumulative since t = 0, integrated exactly by the engine
   EngineCounters counters;
 };
 

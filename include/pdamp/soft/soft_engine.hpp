@@ -60,7 +60,8 @@ class SoftEngine final : public Engine {
   void move(double kick_s, double dt_s);
   void refresh_neighbours();
   void compute_forces(double dt_s);
-  void add_host_forces();
+  /// The host's forces at the end of a step of dt_s, and their books over it.
+  void add_host_forces(double dt_s);
   void kick(double dt_s);
   /// Throws RuntimeFailure if a position (a sphere's or the host's) is no longer a finite number.
   void check_state_finite() const;
@@ -217,11 +218,17 @@ class SoftEngine final : public Engine {
   HostState host_;
   double host_particle_force_N_ = 0.0;  ///< vertical force of the particles on the host
   double host_other_force_N_ = 0.0;     ///< spring, damper and excitation at the current step
-  /// The host's forces and positions at the last force computation, for the energy books.
+  /// The host's forces and positions at the last force computation, for the energy and load books.
   struct HostForces {
     double stretch_m = 0.0, stretch_rate_m_s = 0.0, applied_N = 0.0, particles_N = 0.0, z_m = 0.0, base_m = 0.0;
+    double own_N = 0.0;
+    ExcitationPhase::Weights weights{0.0, 1.0};
   };
   HostForces previous_host_forces_;
+  /// Books the host's load integrals over the step of dt_s from `before` to `now`.
+  void book_host_load(const HostForces& before, const HostForces& now, double dt_s);
+  /// The host's load integrals: the trapezoid over each step, as the kicks apply the forces.
+  HostLoadBooks host_load_;
 
   EnergyLedger ledger_;
   double contact_elastic_J_ = 0.0;

@@ -73,7 +73,7 @@ struct FrfDrive {
 /// A frequency-response point's metrics over its measured cycles.
 struct ResponseMetrics {
   bool settled = false;
-  int cycles_to_steady = 0;  ///< cycles run before the measured ones (the cap if not settled)
+  int cycles_to_steady = 0;  ///< cycles run before the measured ones (not settled: all but the last n)
   int measured_cycles = 0;
   double amplitude_m = 0.0;         ///< X over the measured cycles together
   double amplitude_spread_m = 0.0;  ///< max − min of the measured cycles' own X

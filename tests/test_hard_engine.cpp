@@ -170,34 +170,6 @@ TEST_CASE("the gas of 10^5 spheres, where the engine prefetches records and cell
   MESSAGE("energy error " << worst_energy_error << " over " << engine.collisions() << " collisions");
 }
 
-TEST_CASE("vertical momentum of spheres and host is conserved by every kind of collision") {
-  // A free host with a negligible spring (its impulse over the run is below 1e-25 N s),
-  // no damper, no gravity: M v_h + Σ m v_z is constant whatever the spheres hit
-  // (caps: normal impulse; side wall: friction).
-  Scenario s = test::scenario_from(
-      "[host]\nmass_kg = 0.002\nstiffness_N_m = 1e-20\ndamping_N_s_m = 0\nz0_m = 0\nv0_m_s = 0.05\n"
-      "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.008\nheight_m = 0.006\n"
-      "[particles]\ncount = 40\ndiameter_m = 0.001\n[hard]\nen = 0.7\nmu = 0.4\nbeta0 = 0.3\n");
-  HardEngine engine(s, moving_spheres(s, 0.3, 200.0, 9));
-  auto momentum = [&] {
-    const State st = engine.state();
-    double p = s.host.mass_kg * st.observation.host.v_m_s;
-    for (Eigen::Index i = 0; i < st.particles.size(); ++i)
-      p += st.particles.mass_kg[i] * st.particles.velocity_m_s(2, i);
-    return p;
-  };
-  const double p0 = momentum();
-  const double scale = s.host.mass_kg * 0.05 + 40 * 4e-6 * 0.3;
-  for (int k = 1; k <= 50; ++k) {
-    engine.advance_to(0.002 * k);
-    CHECK(std::abs(momentum() - p0) <= 1e-13 * scale);
-  }
-  CHECK(test::statistic(engine, "events_cap") > 50);
-  CHECK(test::statistic(engine, "events_wall") > 50);
-  CHECK(test::statistic(engine, "events_sphere_sphere") > 50);
-  CHECK(engine.observe().energy.balance_relative_error(0.0) >= 0.0);
-}
-
 TEST_CASE("angular momentum about the origin is conserved by a frictional sphere-sphere collision") {
   Scenario s = test::fixed_walls(
       "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n"
@@ -223,7 +195,8 @@ TEST_CASE("angular momentum about the origin is conserved by a frictional sphere
   CHECK(engine.observe().energy.dissipated_friction_J > 0.0);
 }
 
-TEST_CASE("energy ledger balances to 1e-9 for every excitation mode, with no overlaps") {
+// The energy books in every mode are the contract's (test_engine_contract.cpp).
+TEST_CASE("no overlaps in any excitation mode") {
   const std::vector<ScenarioOverrides> modes = {
       {},
       {"excitation.mode=prescribed", "excitation.amplitude_m=0.001", "excitation.frequency_hz=30"},
@@ -234,17 +207,11 @@ TEST_CASE("energy ledger balances to 1e-9 for every excitation mode, with no ove
     CAPTURE(mode.empty() ? std::string("free") : mode[0]);
     const Scenario s = load_scenario(test::scenario_file("small"), mode);
     HardEngine engine(s, placed(s));
-    const double e0 = engine.observe().energy.stored_J();
-    double worst = 0;
     for (int k = 1; k <= 100; ++k) {
       engine.advance_to(0.001 * k);
-      worst = std::max(worst, engine.observe().energy.balance_relative_error(e0));
       REQUIRE(engine.max_overlap_m() <= engine.overlap_tolerance_m());
     }
-    CHECK(worst <= 1e-9);
-    const EnergyLedger ledger = engine.observe().energy;
-    CHECK(ledger.dissipated_impact_J > 0);
-    CHECK(ledger.dissipated_friction_J > 0);
+    CHECK(engine.observe().energy.dissipated_impact_J > 0);
   }
 }
 
@@ -340,22 +307,6 @@ TEST_CASE(
   engine.advance_to(10.0);
   CHECK(engine.collisions() - settled_events < 1000);
   CHECK(engine.max_overlap_m() <= engine.overlap_tolerance_m());
-}
-
-TEST_CASE("the same scenario and seed give bit-identical results") {
-  const Scenario s = load_scenario(test::scenario_file("small"), {"run.duration_s=0.05"});
-  const Particles initial = placed(s);
-  HardEngine a(s, initial), b(s, initial);
-  for (int k = 1; k <= 50; ++k) {
-    a.advance_to(0.001 * k);
-    b.advance_to(0.001 * k);
-    const Observation oa = a.observe(), ob = b.observe();
-    REQUIRE(oa.host.z_m == ob.host.z_m);
-    REQUIRE(oa.energy.dissipated_impact_J == ob.energy.dissipated_impact_J);
-    REQUIRE(oa.energy.dissipated_friction_J == ob.energy.dissipated_friction_J);
-  }
-  CHECK(a.state().particles.position_m == b.state().particles.position_m);
-  CHECK(a.statistics() == b.statistics());
 }
 
 TEST_CASE("overlapping initial spheres (a soft-settled bed) are pushed just apart, and a large push is reported") {

@@ -2,7 +2,7 @@
 /// (TEST_CASE_TEMPLATE over SoftModel and HardModel); the others run both engines on one
 /// case and compare them. Every tolerance is derived in the test from what the models
 /// share (the calibrated e_n(v)) and what they cannot share (contact duration, multi-contacts).
-/// The host alone on both models is in test_cli.cpp (the stored Table 1 free decay).
+/// The properties every engine must have (the contract) are in test_engine_contract.cpp.
 #include <doctest/doctest.h>
 
 #include <Eigen/Geometry>
@@ -11,6 +11,7 @@
 #include <numbers>
 #include <vector>
 
+#include "engine_models.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/calibration.hpp"
 #include "pdamp/sim/engine_factory.hpp"

@@ -176,28 +176,6 @@ TEST_CASE("a sphere sliding on the floor rolls at 5/7 of its initial speed") {
   CHECK(e.dissipated_friction_J == doctest::Approx(0.5 * m * 0.04 * 2.0 / 7.0).epsilon(5e-3));
 }
 
-TEST_CASE("momentum exchange with a free host: particles and host conserve vertical momentum") {
-  // A nearly free host (its spring's impulse is below 1e-16 N s here), no gravity.
-  const Scenario s = scenario_from(wide_cavity + "[host]\nstiffness_N_m = 1e-12\ndamping_N_s_m = 0\nmass_kg = 0.001\n");
-  Particles p = spheres({{0.002, 0, 0.0185}, {-0.003, 0.001, 0.0015}}, {{0.1, 0, 1.3}, {0, -0.2, -0.9}});
-  p.angular_velocity_rad_s.col(0) << 0, 400, 0;  // spin: the side and caps' friction acts too
-  SoftEngine engine(s, p);
-  const double initial_energy = engine.observe().energy.stored_J();
-  auto momentum = [&] {
-    const State st = engine.state();
-    double z = 0.001 * st.observation.host.v_m_s;
-    for (Eigen::Index i = 0; i < st.particles.size(); ++i)
-      z += st.particles.mass_kg[i] * st.particles.velocity_m_s(2, i);
-    return z;
-  };
-  const double before = momentum();
-  const double scale = p.mass_kg[0] * 1.3 + p.mass_kg[1] * 0.9;
-  engine.advance_to(0.01);
-  CHECK(engine.observe().energy.dissipated_impact_J > 0);  // both spheres hit a cap
-  CHECK(std::abs(momentum() - before) <= 1e-12 * scale);
-  CHECK(engine.observe().energy.balance_relative_error(initial_energy) < 1e-4);
-}
-
 TEST_CASE("no contact is ever missed: the engine's contacts equal a brute-force search every step") {
   // A dense, agitated gas of 400 spheres (32 % solid) in a shaking host.
   const Scenario s = test::scenario_from("[particles]\ncount = 400\n[cavity]\ndiameter_m = 0.012\nheight_m = 0.004\n");
@@ -355,17 +333,6 @@ TEST_CASE("threads: one or two, the results are the same bits") {
   CHECK(one.observation.energy.contact_elastic_J == two.observation.energy.contact_elastic_J);
 }
 
-TEST_CASE("determinism: the same scenario and bed give bit-identical results") {
-  const Scenario s = scenario_from("[particles]\ncount = 60\n[cavity]\ndiameter_m = 0.008\nheight_m = 0.006\n");
-  const Particles bed = place_particles(s.particles, s.cavity, s.host.z0_m);
-  SoftEngine a(s, bed), b(s, bed);
-  a.advance_to(0.02);
-  b.advance_to(0.02);
-  CHECK(a.state().particles.position_m == b.state().particles.position_m);
-  CHECK(a.observe().energy.dissipated_friction_J == b.observe().energy.dissipated_friction_J);
-  CHECK(a.observe().host.z_m == b.observe().host.z_m);
-}
-
 TEST_CASE("an impact the contact law cannot stop fails the run and says why") {
   // At 60 m/s the paper's k_n stops a 1 mm lead sphere only 1.3 mm deep, its centre
   // beyond the floor (Table 4 at 500 Hz from 10 mm is like this). The run observes every
@@ -407,8 +374,10 @@ TEST_CASE("SIMD paths: every instruction set the CPU runs gives the same bits") 
     return engine.state();
   };
   const State reference = run_on(SimdPath::sse2);
+  int compared = 0;
   for (const SimdPath path : {SimdPath::avx2, SimdPath::avx512}) {
     if (!is_available(path)) continue;
+    ++compared;
     CAPTURE(to_string(path));
     const State other = run_on(path);
     CHECK(other.particles.position_m == reference.particles.position_m);
@@ -419,6 +388,8 @@ TEST_CASE("SIMD paths: every instruction set the CPU runs gives the same bits") 
     CHECK(other.observation.energy.dissipated_friction_J == reference.observation.energy.dissipated_friction_J);
     CHECK(other.observation.energy.contact_elastic_J == reference.observation.energy.contact_elastic_J);
   }
+  // CTest reports a test whose output says [skipped] as skipped (tests/CMakeLists.txt).
+  if (compared == 0) MESSAGE("[skipped] this build or CPU runs sse2 only: no other path to compare with");
 }
 
 namespace {

@@ -96,13 +96,14 @@ void store_two_runs(RunStore& store) {
 TEST_CASE("a new store gets the current schema in WAL mode") {
   test::TempDir dir("store-new");
   RunStore store(dir / "runs.sqlite");
-  sqlite::Statement version(store.database(), "PRAGMA user_version");
+  sqlite::Database db(store.file());  // a second connection: the store's own is private
+  sqlite::Statement version(db, "PRAGMA user_version");
   REQUIRE(version.step());
   CHECK(version.column_int(0) == RunStore::schema_version());
-  sqlite::Statement mode(store.database(), "PRAGMA journal_mode");
+  sqlite::Statement mode(db, "PRAGMA journal_mode");
   REQUIRE(mode.step());
   CHECK(mode.column_text(0) == "wal");
-  sqlite::Statement keys(store.database(), "PRAGMA foreign_keys");
+  sqlite::Statement keys(db, "PRAGMA foreign_keys");
   REQUIRE(keys.step());
   CHECK(keys.column_int(0) == 1);
 }
@@ -144,18 +145,19 @@ TEST_CASE("runs, samples and cycles round-trip through the public tables and vie
   REQUIRE(stats.size() == 2);
   CHECK(stats[0] == std::pair<std::string, std::int64_t>{"events_sphere_sphere", 40});
   CHECK(stats[1] == std::pair<std::string, std::int64_t>{"events_wall", 13});
-  sqlite::Statement gamma(store.database(), "SELECT gamma IS NULL, seed, dt_s FROM cycles JOIN runs USING (run_id)");
+  sqlite::Database db(store.file());
+  sqlite::Statement gamma(db, "SELECT gamma IS NULL, seed, dt_s FROM cycles JOIN runs USING (run_id)");
   REQUIRE(gamma.step());
   CHECK(gamma.column_int(0) == 1);
   CHECK(gamma.column_int(1) == 7);
   CHECK(gamma.column_double(2) == 2.5e-6);
   // Foreign keys hold: samples of an unknown run are refused.
-  CHECK_THROWS_AS(store.database().exec("INSERT INTO samples (run_id, t_s, host_z_m, host_v_m_s, "
-                                        "particle_translational_J, particle_rotational_J, host_kinetic_J, "
-                                        "spring_potential_J, gravitational_potential_J, contact_elastic_J, "
-                                        "excitation_work_J, dissipated_impact_J, dissipated_friction_J, "
-                                        "dissipated_viscous_J, energy_balance_rel_err, contacts, events, steps) "
-                                        "VALUES (99, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)"),
+  CHECK_THROWS_AS(db.exec("INSERT INTO samples (run_id, t_s, host_z_m, host_v_m_s, "
+                          "particle_translational_J, particle_rotational_J, host_kinetic_J, "
+                          "spring_potential_J, gravitational_potential_J, contact_elastic_J, "
+                          "excitation_work_J, dissipated_impact_J, dissipated_friction_J, "
+                          "dissipated_viscous_J, energy_balance_rel_err, contacts, events, steps) "
+                          "VALUES (99, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)"),
                   RuntimeFailure);
 }
 
@@ -181,7 +183,7 @@ TEST_CASE("a store written by a newer pdamp, or a foreign database, is refused")
   test::TempDir dir("store-refuse");
   {
     RunStore store(dir / "newer.sqlite");
-    store.database().exec("PRAGMA user_version = 999");
+    sqlite::Database(store.file()).exec("PRAGMA user_version = 999");
   }
   CHECK_THROWS_WITH_AS(RunStore(dir / "newer.sqlite"), doctest::Contains("newer"), InputError);
   {
@@ -212,7 +214,8 @@ TEST_CASE("an older store is migrated forward and keeps its runs") {
     id = v1.last_insert_rowid();
   }
   RunStore store(file);
-  sqlite::Statement version(store.database(), "PRAGMA user_version");
+  sqlite::Database db(file);
+  sqlite::Statement version(db, "PRAGMA user_version");
   REQUIRE(version.step());
   CHECK(version.column_int(0) == RunStore::schema_version());
   CHECK(store.summary(id).has_value());
@@ -426,7 +429,7 @@ TEST_CASE("delete_runs removes runs with every row that refers to them, all or n
   test::TempDir dir("store-delete");
   RunStore store(dir / "runs.sqlite");
   store_two_runs(store);
-  sqlite::Database& db = store.database();
+  sqlite::Database db(store.file());
   auto rows_of = [&](const std::string& table, const std::string& column = "run_id") {
     return scalar(db, "SELECT count(*) FROM " + table + " WHERE " + column + " = 2");
   };
@@ -471,7 +474,8 @@ TEST_CASE("where a run's snapshots are: none, recorded, then updated with the fr
   CHECK(s->collection == "/frames/run-1/run-1.pvd");
   CHECK(s->interval_s == 0.01);
   CHECK(s->frames == 151);
-  CHECK(scalar(store.database(), "SELECT count(*) FROM run_snapshots") == 1);
+  sqlite::Database db(store.file());
+  CHECK(scalar(db, "SELECT count(*) FROM run_snapshots") == 1);
   CHECK_THROWS_AS(store.save_snapshots(id, {"/f", "/f/r.pvd", 0.0, 1}), std::exception);  // interval_s > 0
 }
 
@@ -503,7 +507,7 @@ TEST_CASE("a store of schema 5 is migrated: every row kept, and run ids beyond a
     v5.exec("PRAGMA foreign_keys = OFF; DELETE FROM runs WHERE run_id = 3");
   }
   RunStore store(file);
-  sqlite::Database& db = store.database();
+  sqlite::Database db(store.file());
   CHECK(scalar(db, "PRAGMA user_version") == RunStore::schema_version());
   CHECK(scalar(db, "PRAGMA application_id") == 1885626733);
   CHECK(scalar(db, "SELECT count(*) FROM runs") == 2);

@@ -59,7 +59,8 @@ TEST_CASE("a run records what it started from once its engine is built") {
   REQUIRE(s);
   CHECK(s->status == "completed");
   CHECK(s->n_samples == 101);
-  sqlite::Statement start(store.database(),
+  sqlite::Database db(store.file());
+  sqlite::Statement start(db,
                           "SELECT dt_s IS NULL, initial_state_id IS NULL, solid_fraction FROM runs WHERE run_id = 1");
   REQUIRE(start.step());
   CHECK(start.column_int(0) == 1);  // the host alone has no time step

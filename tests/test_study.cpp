@@ -45,7 +45,8 @@ std::string error_of(const std::function<void()>& f) {
 }
 
 std::int64_t scalar(RunStore& store, const std::string& sql) {
-  sqlite::Statement q(store.database(), sql);
+  sqlite::Database db(store.file());
+  sqlite::Statement q(db, sql);
   q.step();
   return q.column_int(0);
 }

@@ -35,7 +35,7 @@ extern "C" void request_stop(int signal_number) {
 
 void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
   const auto s = store.summary(run_id);
-  if (!s) throw InputError("run " + std::to_string(run_id) + " is not in '" + store.database().file().string() + "'");
+  if (!s) throw InputError("run " + std::to_string(run_id) + " is not in '" + store.file().string() + "'");
   out << "run " << s->run_id << ": " << s->model << " model, scenario '" << printable(s->scenario_name) << "', "
       << s->status;
   if (!s->message.empty()) out << " (" << printable(s->message) << ")";

@@ -10,60 +10,31 @@
 namespace pdamp {
 namespace {
 
-struct Cycle {
-  double t_mid_s, amplitude_m, freq_hz, psi;
-  std::optional<double> gamma;
-  double t_start_s;
-};
-
-std::vector<Cycle> load_cycles(RunStore& store, std::int64_t run_id) {
-  sqlite::Statement q(store.database(),
-                      "SELECT t_start_s, t_end_s, amplitude_m, freq_hz, gamma, psi FROM cycles WHERE run_id = ? "
-                      "ORDER BY cycle");
-  q.bind(1, run_id);
-  std::vector<Cycle> cycles;
-  while (q.step()) {
-    cycles.push_back({0.5 * (q.column_double(0) + q.column_double(1)), q.column_double(2), q.column_double(3),
-                      q.column_double(5), q.column_optional_double(4), q.column_double(0)});
-  }
-  return cycles;
-}
-
-struct Dissipation {
-  double t_s = 0.0, impact_J = 0.0, friction_J = 0.0, viscous_J = 0.0;
-  std::int64_t steps = 0, events = 0;
-  double total_J() const { return impact_J + friction_J + viscous_J; }
-};
-
 /// The last sample at or before t (or the run's last sample).
-Dissipation dissipation_at(RunStore& store, std::int64_t run_id, double t_s) {
-  sqlite::Statement q(store.database(),
-                      "SELECT t_s, dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J, steps, events "
-                      "FROM samples WHERE run_id = ? AND t_s <= ? ORDER BY t_s DESC LIMIT 1");
-  q.bind(1, run_id).bind(2, t_s * (1.0 + 1e-12));
-  if (!q.step()) throw InputError("run " + std::to_string(run_id) + " has no samples to compare");
-  return {q.column_double(0), q.column_double(1), q.column_double(2),
-          q.column_double(3), q.column_int(4),    q.column_int(5)};
+const Observation& observation_at(const RunResults& run, double t_s) {
+  const auto after = std::upper_bound(run.samples.begin(), run.samples.end(), t_s * (1.0 + 1e-12),
+                                      [](double t, const SampleRecord& sample) { return t < sample.observation.t_s; });
+  if (after == run.samples.begin()) {
+    throw InputError("run " + std::to_string(run.run_id) + " has no samples to compare" +
+                     (run.samples.empty() ? "" : " at t = " + std::to_string(t_s) + " s"));
+  }
+  return (after - 1)->observation;
 }
 
-double wall_time(RunStore& store, std::int64_t run_id) {
-  const auto s = store.summary(run_id);
-  if (!s) throw InputError("run " + std::to_string(run_id) + " is not in the store");
-  return s->wall_time_s.value_or(0.0);
-}
+double mid_time_s(const CycleRecord& c) { return 0.5 * (c.t_start_s + c.t_end_s); }
 
 /// Amplitude of a run's cycles at time t, interpolated between cycle mid-times.
-std::optional<double> amplitude_at(const std::vector<Cycle>& cycles, double t_s) {
-  if (cycles.empty() || t_s < cycles.front().t_mid_s || t_s > cycles.back().t_mid_s) return std::nullopt;
-  const auto after =
-      std::lower_bound(cycles.begin(), cycles.end(), t_s, [](const Cycle& c, double t) { return c.t_mid_s < t; });
+std::optional<double> amplitude_at(const std::vector<CycleRecord>& cycles, double t_s) {
+  if (cycles.empty() || t_s < mid_time_s(cycles.front()) || t_s > mid_time_s(cycles.back())) return std::nullopt;
+  const auto after = std::lower_bound(cycles.begin(), cycles.end(), t_s,
+                                      [](const CycleRecord& c, double t) { return mid_time_s(c) < t; });
   if (after == cycles.begin()) return after->amplitude_m;
   const auto before = after - 1;
-  const double f = (t_s - before->t_mid_s) / (after->t_mid_s - before->t_mid_s);
+  const double f = (t_s - mid_time_s(*before)) / (mid_time_s(*after) - mid_time_s(*before));
   return before->amplitude_m + f * (after->amplitude_m - before->amplitude_m);
 }
 
-std::optional<double> small_amplitude_frequency(const std::vector<Cycle>& cycles) {
+std::optional<double> small_amplitude_frequency(const std::vector<CycleRecord>& cycles) {
   double sum = 0.0;
   int count = 0;
   for (const auto& c : cycles) {
@@ -75,7 +46,7 @@ std::optional<double> small_amplitude_frequency(const std::vector<Cycle>& cycles
   return count > 0 ? std::optional(sum / count) : std::nullopt;
 }
 
-std::optional<double> first_time_below_gamma_1(const std::vector<Cycle>& cycles) {
+std::optional<double> first_time_below_gamma_1(const std::vector<CycleRecord>& cycles) {
   for (const auto& c : cycles) {
     if (c.gamma && *c.gamma < 1.0) return c.t_start_s;
   }
@@ -83,7 +54,7 @@ std::optional<double> first_time_below_gamma_1(const std::vector<Cycle>& cycles)
 }
 
 /// ψ per Γ bin [2^k, 2^(k+1)): (sum, count) per model.
-std::map<int, std::pair<double, int>> psi_by_gamma_bin(const std::vector<Cycle>& cycles) {
+std::map<int, std::pair<double, int>> psi_by_gamma_bin(const std::vector<CycleRecord>& cycles) {
   std::map<int, std::pair<double, int>> bins;
   for (const auto& c : cycles) {
     if (!c.gamma || *c.gamma <= 0.0) continue;
@@ -96,18 +67,18 @@ std::map<int, std::pair<double, int>> psi_by_gamma_bin(const std::vector<Cycle>&
 
 }  // namespace
 
-ComparisonRecord compare_stored_runs(RunStore& store, std::int64_t soft_run_id, std::int64_t hard_run_id) {
+ComparisonRecord compare_runs(const RunResults& soft_run, const RunResults& hard_run) {
   ComparisonRecord r;
-  r.soft_run_id = soft_run_id;
-  r.hard_run_id = hard_run_id;
-  const auto soft = load_cycles(store, soft_run_id), hard = load_cycles(store, hard_run_id);
+  r.soft_run_id = soft_run.run_id;
+  r.hard_run_id = hard_run.run_id;
+  const auto &soft = soft_run.cycles, &hard = hard_run.cycles;
 
   if (!soft.empty()) {
     const double reference = soft.front().amplitude_m;
     double worst = 0.0, squares = 0.0;
     int compared = 0;
     for (const auto& c : soft) {
-      const auto other = amplitude_at(hard, c.t_mid_s);
+      const auto other = amplitude_at(hard, mid_time_s(c));
       if (!other) continue;
       const double difference = std::abs(*other - c.amplitude_m) / reference;
       worst = std::max(worst, difference);
@@ -148,36 +119,36 @@ ComparisonRecord compare_stored_runs(RunStore& store, std::int64_t soft_run_id, 
   }
   if (shared > 0) r.psi_mean_abs_diff = differences / shared;
 
-  const Dissipation soft_end = dissipation_at(store, soft_run_id, 1e300),
-                    hard_end = dissipation_at(store, hard_run_id, 1e300);
-  r.dissipated_soft_J = soft_end.total_J();
-  r.dissipated_hard_J = hard_end.total_J();
+  const Observation &soft_end = observation_at(soft_run, 1e300), &hard_end = observation_at(hard_run, 1e300);
+  r.dissipated_soft_J = soft_end.energy.dissipated_J();
+  r.dissipated_hard_J = hard_end.energy.dissipated_J();
   if (r.dissipated_soft_J > 0.0)
     r.dissipated_rel_diff = (r.dissipated_hard_J - r.dissipated_soft_J) / r.dissipated_soft_J;
+  const double end_s = std::min(soft_end.t_s, hard_end.t_s);
   std::vector<double> times;
   for (const double t : comparison_times_s) {
-    if (t <= std::min(soft_end.t_s, hard_end.t_s)) times.push_back(t);
+    if (t <= end_s) times.push_back(t);
   }
-  times.push_back(std::min(soft_end.t_s, hard_end.t_s));
+  times.push_back(end_s);
   times.erase(std::unique(times.begin(), times.end()), times.end());
   for (const double t : times) {
-    for (const auto& [model, id] : {std::pair{"soft", soft_run_id}, std::pair{"hard", hard_run_id}}) {
-      const Dissipation d = dissipation_at(store, id, t);
-      r.energy.push_back({t, model, d.impact_J, d.friction_J, d.viscous_J});
+    for (const auto& [model, run] : {std::pair{"soft", &soft_run}, std::pair{"hard", &hard_run}}) {
+      const EnergyLedger& e = observation_at(*run, t).energy;
+      r.energy.push_back({t, model, e.dissipated_impact_J, e.dissipated_friction_J, e.dissipated_viscous_J});
     }
   }
-  r.wall_time_soft_s = wall_time(store, soft_run_id);
-  r.wall_time_hard_s = wall_time(store, hard_run_id);
+  r.wall_time_soft_s = soft_run.wall_time_s;
+  r.wall_time_hard_s = hard_run.wall_time_s;
   if (r.wall_time_hard_s > 0.0) r.wall_time_ratio = r.wall_time_soft_s / r.wall_time_hard_s;
-  r.soft_steps = soft_end.steps;
-  r.hard_events = hard_end.events;
+  r.soft_steps = soft_end.counters.steps;
+  r.hard_events = hard_end.counters.events;
   return r;
 }
 
 std::pair<std::int64_t, ComparisonRecord> store_comparison(RunStore& store, const Scenario& scenario,
                                                            std::optional<std::int64_t> bed_state_id,
                                                            std::int64_t soft_run_id, std::int64_t hard_run_id) {
-  ComparisonRecord comparison = compare_stored_runs(store, soft_run_id, hard_run_id);
+  ComparisonRecord comparison = compare_runs(store.results(soft_run_id), store.results(hard_run_id));
   comparison.scenario_name = scenario.name;
   comparison.initial_state_id = bed_state_id;
   comparison.hard_restitution = scenario.hard_restitution == HardRestitution::calibrated ? "calibrated" : "constant";

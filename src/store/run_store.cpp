@@ -79,6 +79,15 @@ RunSummary read_summary(const sqlite::Statement& row) {
   return s;
 }
 
+// A sample's and a cycle's columns after run_id, in the order insert_ and read_ bind them.
+constexpr std::string_view sample_columns =
+    "t_s, host_z_m, host_v_m_s, particle_translational_J, particle_rotational_J, host_kinetic_J, "
+    "spring_potential_J, gravitational_potential_J, contact_elastic_J, excitation_work_J, dissipated_impact_J, "
+    "dissipated_friction_J, dissipated_viscous_J, energy_balance_rel_err, contacts, events, steps";
+constexpr std::string_view cycle_columns =
+    "cycle, t_start_s, t_end_s, amplitude_m, freq_hz, gamma, psi, psi_impact, psi_friction, psi_viscous, "
+    "max_host_kinetic_J";
+
 void insert_sample(sqlite::Statement& insert, std::int64_t run_id, const SampleRecord& sample) {
   const Observation& o = sample.observation;
   const EnergyLedger& e = o.energy;
@@ -117,6 +126,43 @@ void insert_cycle(sqlite::Statement& insert, std::int64_t run_id, const CycleRec
       .bind(11, c.psi_viscous)
       .bind(12, c.max_host_kinetic_J);
   insert.run();
+}
+
+SampleRecord read_sample(const sqlite::Statement& row) {
+  SampleRecord sample;
+  Observation& o = sample.observation;
+  EnergyLedger& e = o.energy;
+  o.t_s = row.column_double(0);
+  o.host = {row.column_double(1), row.column_double(2)};
+  e.particle_translational_J = row.column_double(3);
+  e.particle_rotational_J = row.column_double(4);
+  e.host_kinetic_J = row.column_double(5);
+  e.spring_potential_J = row.column_double(6);
+  e.gravitational_potential_J = row.column_double(7);
+  e.contact_elastic_J = row.column_double(8);
+  e.excitation_work_J = row.column_double(9);
+  e.dissipated_impact_J = row.column_double(10);
+  e.dissipated_friction_J = row.column_double(11);
+  e.dissipated_viscous_J = row.column_double(12);
+  sample.energy_balance_rel_err = row.column_double(13);
+  o.counters.contacts = row.column_int(14);
+  o.counters.events = row.column_int(15);
+  o.counters.steps = row.column_int(16);
+  return sample;
+}
+
+CycleRecord read_cycle(const sqlite::Statement& row) {
+  return CycleRecord{static_cast<int>(row.column_int(0)),
+                     row.column_double(1),
+                     row.column_double(2),
+                     row.column_double(3),
+                     row.column_double(4),
+                     row.column_optional_double(5),
+                     row.column_double(6),
+                     row.column_double(7),
+                     row.column_double(8),
+                     row.column_double(9),
+                     row.column_double(10)};
 }
 
 }  // namespace
@@ -218,17 +264,11 @@ void RunStore::start_run(std::int64_t run_id, const RunStart& start) {
 void RunStore::append_results(std::int64_t run_id, std::span<const SampleRecord> samples,
                               std::span<const CycleRecord> cycles) {
   sqlite::write_transaction(*db_, [&] {
-    sqlite::Statement sample(*db_,
-                             "INSERT INTO samples (run_id, t_s, host_z_m, host_v_m_s, particle_translational_J, "
-                             "particle_rotational_J, host_kinetic_J, spring_potential_J, gravitational_potential_J, "
-                             "contact_elastic_J, excitation_work_J, dissipated_impact_J, dissipated_friction_J, "
-                             "dissipated_viscous_J, energy_balance_rel_err, contacts, events, steps) "
-                             "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    sqlite::Statement sample(*db_, "INSERT INTO samples (run_id, " + std::string(sample_columns) +
+                                       ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (const SampleRecord& s : samples) insert_sample(sample, run_id, s);
-    sqlite::Statement cycle(*db_,
-                            "INSERT INTO cycles (run_id, cycle, t_start_s, t_end_s, amplitude_m, freq_hz, gamma, psi, "
-                            "psi_impact, psi_friction, psi_viscous, max_host_kinetic_J) "
-                            "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    sqlite::Statement cycle(*db_, "INSERT INTO cycles (run_id, " + std::string(cycle_columns) +
+                                      ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (const CycleRecord& c : cycles) insert_cycle(cycle, run_id, c);
   });
 }
@@ -401,6 +441,23 @@ void RunStore::save_snapshots(std::int64_t run_id, const SnapshotRecord& s) {
     upsert.bind(1, run_id).bind(2, s.folder).bind(3, s.collection).bind(4, s.interval_s).bind(5, s.frames).run();
   });
 }
+
+RunResults RunStore::results(std::int64_t run_id) {
+  const auto run = summary(run_id);
+  if (!run) throw InputError("run " + std::to_string(run_id) + " is not in '" + db_->file().string() + "'");
+  RunResults results{run_id, {}, {}, run->wall_time_s.value_or(0.0)};
+  sqlite::Statement samples(*db_,
+                            "SELECT " + std::string(sample_columns) + " FROM samples WHERE run_id = ? ORDER BY t_s");
+  samples.bind(1, run_id);
+  while (samples.step()) results.samples.push_back(read_sample(samples));
+  sqlite::Statement cycles(*db_,
+                           "SELECT " + std::string(cycle_columns) + " FROM cycles WHERE run_id = ? ORDER BY cycle");
+  cycles.bind(1, run_id);
+  while (cycles.step()) results.cycles.push_back(read_cycle(cycles));
+  return results;
+}
+
+const std::filesystem::path& RunStore::file() const { return db_->file(); }
 
 std::optional<SnapshotRecord> RunStore::snapshots(std::int64_t run_id) {
   sqlite::Statement query(*db_, "SELECT folder, collection, interval_s, frames FROM run_snapshots WHERE run_id = ?");

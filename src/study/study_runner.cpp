@@ -291,8 +291,7 @@ std::int64_t find_or_create_study(RunStore& store, const Study& study) {
       const auto differences = study_differences(stored_study(*record), study);
       if (!differences.empty()) {
         throw InputError("study '" + study.file.name + "' (study " + std::to_string(record->study_id) + " in '" +
-                         store.database().file().string() +
-                         "') was made from another definition:" + join_lines(differences) +
+                         store.file().string() + "') was made from another definition:" + join_lines(differences) +
                          "\nrun it unchanged to resume it, or give this one another [study] name or --db");
       }
       return record->study_id;

@@ -124,6 +124,16 @@ struct ComparisonRecord {
   std::vector<Energy> energy;
 };
 
+/// What the store holds of one run's results, in time order: the input of the comparison
+/// (compare/comparison.hpp). A sample's ledger is read back with host_counts true (the
+/// store keeps the energies, not whether the host's count in E).
+struct RunResults {
+  std::int64_t run_id = 0;
+  std::vector<SampleRecord> samples;  ///< by t_s
+  std::vector<CycleRecord> cycles;    ///< by cycle
+  double wall_time_s = 0.0;           ///< 0 for a run that never ended
+};
+
 /// `read` (the reading commands): the file must be a pdamp store, and is not written
 /// (only migrated if its schema is older). `modify`: the file must be a pdamp store.
 /// `write`: the file may also be missing or empty, and becomes a store.
@@ -176,6 +186,8 @@ class RunStore {
   Particles load_initial_particles(std::int64_t state_id);
 
   std::int64_t save_comparison(const ComparisonRecord& comparison);
+  /// A run's samples and cycles; throws InputError for a run not in the store.
+  RunResults results(std::int64_t run_id);
 
   /// Records (or updates) where a run's snapshots are.
   void save_snapshots(std::int64_t run_id, const SnapshotRecord& snapshots);
@@ -195,6 +207,10 @@ class RunStore {
   /// deleted runs. Settled beds stay (other runs may start from them), and so do snapshot files.
   std::vector<DeletedRun> delete_runs(std::span<const std::int64_t> run_ids, bool including_running);
 
+  const std::filesystem::path& file() const;
+
+  /// The connection, for the store's other classes (StudyStore) and for the Slurm shards'
+  /// own SQL (src/slurm, src/cli/slurm_commands.cpp), which still write through it.
   sqlite::Database& database() { return *db_; }
 
  private:

@@ -251,6 +251,9 @@ TEST_CASE("runs, show, check, keys and version") {
   const Result check = pdamp_cli({"check", "--scenario", table1()}, dir);
   CHECK(check.code == 0);
   CHECK(check.out.find("[soft_wall]") != std::string::npos);
+  // Each engine of the table says what it is for the scenario: the soft one its step.
+  CHECK(check.out.find("# soft engine: time step ") != std::string::npos);
+  CHECK(check.out.find("# hard engine: event-driven, no time step") != std::string::npos);
   const Result keys = pdamp_cli({"run", "--help"}, dir);
   CHECK(keys.code == 0);
   CHECK(keys.out.find("host.stiffness_N_m = 470 [N/m]") != std::string::npos);

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "engine_models.hpp"
+#include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/stored_run.hpp"
 #include "pdamp/store/run_store.hpp"
@@ -173,4 +174,18 @@ TEST_CASE_TEMPLATE("contract: a stored run holds its samples, cycles, statistics
   CHECK(worst <= *summary->energy_balance_rel_err);  // the run's is over every observation, denser than samples
   CHECK(results.samples.back().observation.energy.dissipated_J() > 0);
   CHECK(!results.cycles.empty());  // small.ini's host cycles at ~20 Hz
+}
+
+TEST_CASE("the table of engines: each model once, in Model's order, parsed from its name, the others named") {
+  REQUIRE(engine_kinds().size() == 2);
+  for (std::size_t i = 0; i < engine_kinds().size(); ++i) {
+    const EngineKind& kind = engine_kinds()[i];
+    CHECK(static_cast<std::size_t>(kind.model) == i);
+    CHECK(&engine_kind(kind.model) == &kind);
+    CHECK(parse_model(kind.name) == kind.model);
+    CHECK(to_string(kind.model) == kind.name);
+  }
+  CHECK_THROWS_WITH_AS(
+      parse_model("squishy"),
+      "--model 'squishy': must be 'soft' (time-stepped Hertz DEM) or 'hard' (event-driven hard spheres)", InputError);
 }

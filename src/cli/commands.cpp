@@ -17,7 +17,6 @@
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/sim/stored_run.hpp"
-#include "pdamp/soft/time_step.hpp"
 #include "pdamp/store/run_store.hpp"
 #include "progress.hpp"
 #include "text_table.hpp"
@@ -285,11 +284,13 @@ int check_command(const ScenarioRequest& request) {
   std::cout << "# scenario '" << scenario.name << "' is valid; every key with its resolved value:\n"
             << scenario.canonical_text << "\n";
   if (scenario.particles.count > 0) {
-    std::cout << "# soft engine time step: " << soft::describe_time_step(scenario) << "\n";
-    try {
-      check_model_can_run(Model::soft, scenario);
-    } catch (const InputError& e) {
-      std::cout << "# the soft model cannot run it: " << e.what() << "\n";
+    for (const EngineKind& kind : engine_kinds()) {
+      std::cout << "# " << kind.name << " engine: " << kind.describe(scenario) << "\n";
+      try {
+        check_model_can_run(kind.model, scenario);
+      } catch (const InputError& e) {
+        std::cout << "# the " << kind.name << " model cannot run it: " << e.what() << "\n";
+      }
     }
   }
   return 0;

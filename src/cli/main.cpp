@@ -14,8 +14,8 @@
 #include "commands.hpp"
 #include "options.hpp"
 #include "pdamp/errors.hpp"
+#include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/snapshots.hpp"
-#include "pdamp/soft/simd_path.hpp"
 #include "pdamp/version.hpp"
 #include "rom_command.hpp"
 #include "study_commands.hpp"
@@ -122,8 +122,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     }
     const ScenarioRequest request = scenario_request(line, command);
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
-    if (vm.count("simd"))
-      soft::set_default_simd_path(soft::parse_simd_path(vm["simd"].as<std::string>(), "--simd"), "--simd");
+    if (vm.count("simd")) set_instruction_set(vm["simd"].as<std::string>(), "--simd");
     return run_command(request, required_option(vm, "model", command), vm["db"].as<std::string>(), snapshot_request(vm),
                        isatty(STDERR_FILENO) != 0);
   }

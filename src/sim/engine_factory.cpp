@@ -1,20 +1,54 @@
 #include "pdamp/sim/engine_factory.hpp"
 
+#include <array>
+
 #include "pdamp/errors.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/host_only_engine.hpp"
 #include "pdamp/sim/run_budget.hpp"
+#include "pdamp/soft/simd_path.hpp"
 #include "pdamp/soft/soft_engine.hpp"
+#include "pdamp/soft/time_step.hpp"
 
 namespace pdamp {
+namespace {
 
-std::string_view to_string(Model model) { return model == Model::soft ? "soft" : "hard"; }
+std::string describe_soft(const Scenario& scenario) { return "time step " + soft::describe_time_step(scenario); }
+std::string describe_hard(const Scenario&) { return "event-driven, no time step"; }
+
+std::unique_ptr<Engine> make_soft(const Scenario& scenario, const Particles& initial, const RestitutionTable*) {
+  return std::make_unique<soft::SoftEngine>(scenario, initial);
+}
+std::unique_ptr<Engine> make_hard(const Scenario& scenario, const Particles& initial,
+                                  const RestitutionTable* calibration) {
+  return std::make_unique<hard::HardEngine>(scenario, initial, calibration);
+}
+
+constexpr std::array<EngineKind, 2> kinds{{
+    {Model::soft, "soft", "time-stepped Hertz DEM", "[soft], [soft_wall]", describe_soft, make_soft},
+    {Model::hard, "hard", "event-driven hard spheres", "[hard], [hard_wall]", describe_hard, make_hard},
+}};
+
+}  // namespace
+
+std::span<const EngineKind> engine_kinds() { return kinds; }
+
+const EngineKind& engine_kind(Model model) { return kinds[static_cast<std::size_t>(model)]; }
+
+std::string_view to_string(Model model) { return engine_kind(model).name; }
 
 Model parse_model(std::string_view text) {
-  if (text == "soft") return Model::soft;
-  if (text == "hard") return Model::hard;
-  throw InputError("--model '" + std::string(text) +
-                   "': must be 'soft' (time-stepped Hertz DEM) or 'hard' (event-driven hard spheres)");
+  std::string valid;
+  for (const EngineKind& kind : kinds) {
+    if (text == kind.name) return kind.model;
+    valid += std::string(valid.empty() ? "" : " or ") + "'" + std::string(kind.name) + "' (" +
+             std::string(kind.description) + ")";
+  }
+  throw InputError("--model '" + std::string(text) + "': must be " + valid);
+}
+
+void set_instruction_set(std::string_view text, std::string_view option) {
+  soft::set_default_simd_path(soft::parse_simd_path(text, option), option);
 }
 
 void check_model_can_run(Model model, const Scenario& scenario) {
@@ -25,8 +59,7 @@ void check_model_can_run(Model model, const Scenario& scenario) {
 std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial,
                                     const RestitutionTable* calibration) {
   if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
-  if (model == Model::soft) return std::make_unique<soft::SoftEngine>(scenario, initial);
-  return std::make_unique<hard::HardEngine>(scenario, initial, calibration);
+  return engine_kind(model).make(scenario, initial, calibration);
 }
 
 }  // namespace pdamp

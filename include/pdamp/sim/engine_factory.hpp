@@ -2,6 +2,8 @@
 /// Chooses the engine for a model name.
 
 #include <memory>
+#include <span>
+#include <string>
 #include <string_view>
 
 #include "pdamp/model/engine.hpp"
@@ -12,9 +14,33 @@ namespace pdamp {
 
 enum class Model { soft, hard };
 
+/// One engine in the table of engines (engine_kinds()), the one place that names them:
+/// its model name, what it is, the scenario sections it reads beyond the shared ones,
+/// what `pdamp check` says of it for a scenario, and its factory.
+struct EngineKind {
+  Model model;
+  std::string_view name;         ///< --model
+  std::string_view description;  ///< in words, for --model's help and errors
+  std::string_view scenario_sections;
+  /// What `pdamp check` prints of the engine for a scenario with spheres (e.g. its step).
+  std::string (*describe)(const Scenario& scenario);
+  std::unique_ptr<Engine> (*make)(const Scenario& scenario, const Particles& initial,
+                                  const RestitutionTable* calibration);
+};
+
+/// Every engine, soft first.
+std::span<const EngineKind> engine_kinds();
+const EngineKind& engine_kind(Model model);
+
 std::string_view to_string(Model model);
-/// Throws InputError for anything but "soft" or "hard".
+/// Throws InputError for a name not in engine_kinds(), naming the valid ones.
 Model parse_model(std::string_view text);
+
+/// --simd: the instruction set of the engines' kernels, "sse2", "avx2" or "avx512", for
+/// this process (the soft engine's passes; the hard engine's neighbour screen takes the
+/// widest the CPU runs, with the same bits). Throws InputError naming `option` for a set
+/// this build or CPU cannot run.
+void set_instruction_set(std::string_view text, std::string_view option);
 
 /// Checks that `model` can run the scenario (the soft engine's time
 /// step, the run's budget: run_budget.hpp), before any work is done. Throws InputError

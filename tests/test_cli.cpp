@@ -95,7 +95,17 @@ TEST_CASE("pdamp run --model hard on small.ini: completed, balanced to 1e-9, eve
     CHECK(count_rows(db, "SELECT value FROM run_statistics WHERE run_id = 1 AND name = '" + std::string(name) + "'") >
           0);
   }
+  CHECK(count_rows(db, "SELECT count(*) FROM run_statistics WHERE run_id = 1 AND name LIKE 'diagnosis_%'") == 0);
   CHECK(count_rows(db, "SELECT count(*) FROM samples WHERE run_id = 1") == 601);
+  // --diagnose-events adds its counts, and the same samples.
+  const Result diagnosed = pdamp_cli({"run", "--scenario", test::scenario_file("small").string(), "--model", "hard",
+                                      "--diagnose-events", "--db", db.string()},
+                                     dir);
+  REQUIRE(diagnosed.code == 0);
+  CHECK(count_rows(db, "SELECT count(*) FROM run_statistics WHERE run_id = 2 AND name LIKE 'diagnosis_%'") == 60);
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM (SELECT t_s, host_z_m FROM samples WHERE run_id = 1 EXCEPT "
+                   "SELECT t_s, host_z_m FROM samples WHERE run_id = 2)") == 0);
   // The fill: 100 spheres of 1.5 mm in a 12 mm x 10 mm hole.
   sqlite::Statement fill(
       d, "SELECT solid_fraction, impact_share + friction_share + viscous_share FROM energy_partition WHERE run_id = 1");
@@ -119,6 +129,8 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
       {{"run", "--model", "hard", "--db", db.string()}, "--scenario is required"},
       {{"run", "--scenario", table1(), "--model", "soft", "--duration", "-1", "--db", db.string()}, "run.duration_s"},
       {{"run", "--scenario", table1(), "--model", "soft", "--bogus", "--db", db.string()}, "bogus"},
+      {{"run", "--scenario", table1(), "--model", "soft", "--diagnose-events", "--db", db.string()},
+       "--diagnose-events counts the event-driven engine's collisions: it needs --model hard"},
       {{"frobnicate"}, "unknown command"},
       {{"show", "abc", "--db", db.string()}, "RUN_ID 'abc'"},
       {{"run", "--scenario", table1(), "--model", "soft", "--threads", "0", "--db", db.string()}, "--threads '0'"},

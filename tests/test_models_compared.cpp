@@ -78,7 +78,7 @@ TEST_CASE_TEMPLATE("a sphere dropped on a fixed floor: bounce heights and time t
   double flight_tolerance_s = 0.0, contact_time_s = 0.0;
   for (int bounce = 1; bounce <= 6; ++bounce) {
     const double v = impact_speed.back();
-    const double tc = soft::hertz_contact_time_s(m, s.soft_wall.kn_N_m1_5, v);
+    const double tc = hertz_contact_time_s(m, s.soft_wall.kn_N_m1_5, v);
     const double e = wall.en_at(v);
     const double per_bounce = (interpolation + soft_step_restitution_error * e + g * tc / v) / e;
     impact_speed.push_back(e * v);
@@ -168,7 +168,7 @@ TEST_CASE("binary collisions: head-on and sliding oblique, both models give the 
     // k_n and 0.5 m/s, theta is 0.2 rad: there the two models must disagree.)
     const double slip_ratio = 6.0, mu = 0.55;
     const double mass = lead_kg_m3 * 4.0 / 3.0 * std::numbers::pi * std::pow(radius_m, 3);
-    const double theta = slip_ratio * speed * soft::hertz_contact_time_s(mass / 2, 3.6e5, speed) / (2 * radius_m);
+    const double theta = slip_ratio * speed * hertz_contact_time_s(mass / 2, 3.6e5, speed) / (2 * radius_m);
     const double impulse_tolerance = restitution_tolerance + slip_ratio * theta;
     const Eigen::Vector3d relative(speed, slip_ratio * speed, 0);
     const PairOutcome soft = collide(Model::soft, relative), hard = collide(Model::hard, relative);

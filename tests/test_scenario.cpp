@@ -83,6 +83,7 @@ TEST_CASE("an empty scenario is the paper's Table 1 case") {
   CHECK_FALSE(s.run.dt_s.has_value());
   CHECK(s.hard_resting.rest_speed_m_s == 0.005);
   CHECK(s.hard_resting.elastic_speed_m_s == 1e-4);
+  CHECK(s.hard_resting.tc_window == 0.0);  // the TC model off
   // The Table 1 soft law's restitution at a 0.5 m/s impact, sphere-sphere and sphere-wall.
   CHECK(s.hard_particle.en == 0.71);
   CHECK(s.hard_wall.en == 0.80);
@@ -148,6 +149,7 @@ TEST_CASE("bad values are rejected with the key, the value and what is valid") {
       {"[hard_wall]\nbeta0 = -2\n", "hard_wall.beta0", "'-2'", "[-1, 1]"},
       {"[hard]\nrest_speed_m_s = -0.01\n", "hard.rest_speed_m_s", "'-0.01'", ">= 0"},
       {"[hard]\nelastic_speed_m_s = fast\n", "hard.elastic_speed_m_s", "'fast'", "not a finite number"},
+      {"[hard]\ntc_window = -1\n", "hard.tc_window", "'-1'", ">= 0"},
       {"[particles]\ncount = 2.5\n", "particles.count", "'2.5'", "whole number"},
       {"[particles]\nseed = -3\n", "particles.seed", "'-3'", "whole number"},
       {"[run]\ndt_s = fast\n", "run.dt_s", "'fast'", "'auto'"},

@@ -136,11 +136,16 @@ int exit_code(const StoredRun& run) {
 }  // namespace
 
 int run_command(const ScenarioRequest& request, const std::string& model_name, const std::filesystem::path& db,
-                const std::optional<SnapshotSettings>& snapshots, bool terminal) {
+                const std::optional<SnapshotSettings>& snapshots, bool terminal, bool diagnose_events) {
   // Everything that can be wrong with the input is found before the store is touched.
   const Model model = parse_model(model_name);
+  if (diagnose_events && model != Model::hard) {
+    throw InputError("--diagnose-events counts the event-driven engine's collisions: it needs --model hard, not '" +
+                     model_name + "'");
+  }
   const Scenario scenario = load_scenario(request.file, request.overrides);
-  const RunPlan plan = plan_run(model, scenario, snapshots);
+  RunPlan plan = plan_run(model, scenario, snapshots);
+  plan.diagnose_events = diagnose_events;
 
   RunStore store(db);
   install_stop_handlers();

@@ -17,9 +17,10 @@ struct ScenarioRequest {
   ScenarioOverrides overrides;
 };
 
-/// `terminal`: whether stderr is one (progress redrawn in place) or a log (a line now and then).
+/// `terminal`: whether stderr is one (progress redrawn in place) or a log (a line now and then);
+/// `diagnose_events`: the hard model counts where its collisions come from (RunPlan).
 int run_command(const ScenarioRequest& request, const std::string& model, const std::filesystem::path& db,
-                const std::optional<SnapshotSettings>& snapshots, bool terminal);
+                const std::optional<SnapshotSettings>& snapshots, bool terminal, bool diagnose_events = false);
 int list_runs_command(const std::filesystem::path& db);
 int show_run_command(const std::string& run_id, const std::filesystem::path& db);
 /// `force`: also runs still marked running.

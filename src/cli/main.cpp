@@ -112,7 +112,10 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
         "threads for the soft engine (default: one per core); results are the same bits for any number")(
         "simd", po::value<std::string>(),
         "the soft engine's instruction set, sse2, avx2 or avx512 (default: the widest this CPU runs); results are the "
-        "same bits on each");
+        "same bits on each")("diagnose-events",
+                             "hard model: count where the collisions come from (the time between a sphere's "
+                             "collisions against the soft law's contact time, the approach speeds) into the run's "
+                             "statistics, diagnosis_* (docs/hard-engine.md); the results are the same bits");
     const CommandLine line = parse_options(args, options);
     const po::variables_map& vm = line.vm;
     if (vm.count("help")) {
@@ -124,7 +127,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
     if (vm.count("simd")) set_instruction_set(vm["simd"].as<std::string>(), "--simd");
     return run_command(request, required_option(vm, "model", command), vm["db"].as<std::string>(), snapshot_request(vm),
-                       isatty(STDERR_FILENO) != 0);
+                       isatty(STDERR_FILENO) != 0, vm.count("diagnose-events") > 0);
   }
   if (command == "compare") {
     po::options_description options("pdamp compare --scenario FILE [options]");

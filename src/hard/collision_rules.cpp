@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "pdamp/model/hertz_contact.hpp"
+
 namespace pdamp::hard {
 
 Eigen::Vector3d apply_mobility(const Mobility& m, const Eigen::Vector3d& n, const Eigen::Vector3d& p) {
@@ -82,16 +84,25 @@ ContactLaws::ContactLaws(const Scenario& scenario, const RestitutionTable* calib
     : sphere_(scenario.hard_particle),
       wall_(scenario.hard_wall),
       calibration_(calibration ? std::optional<RestitutionTable>(*calibration) : std::nullopt),
-      elastic_speed_m_s_(scenario.hard_resting.elastic_speed_m_s) {}
+      elastic_speed_m_s_(scenario.hard_resting.elastic_speed_m_s),
+      tc_window_(scenario.hard_resting.tc_window),
+      sphere_kn_N_m1_5_(scenario.soft_particle.kn_N_m1_5),
+      wall_kn_N_m1_5_(scenario.soft_wall.kn_N_m1_5) {}
 
-HardContactLaw ContactLaws::at(double approach_speed_m_s, bool wall, bool repeat) const {
+bool ContactLaws::within_tc_window(double since_s, double effective_mass_kg, bool wall,
+                                   double approach_speed_m_s) const {
+  return since_s < tc_window_ * hertz_contact_time_s(effective_mass_kg, wall ? wall_kn_N_m1_5_ : sphere_kn_N_m1_5_,
+                                                     approach_speed_m_s);
+}
+
+HardContactLaw ContactLaws::at(double approach_speed_m_s, bool wall, bool repeat, bool lasting) const {
   HardContactLaw law = wall ? wall_ : sphere_;
   if (calibration_) {
     const RestitutionCurve& curve = wall ? calibration_->sphere_wall : calibration_->sphere_sphere;
     law.en = curve.en_at(approach_speed_m_s);
     law.beta0 = curve.beta0_at(approach_speed_m_s);
   }
-  if (approach_speed_m_s < elastic_speed_m_s_ && !repeat) law.en = 1.0;
+  if ((approach_speed_m_s < elastic_speed_m_s_ || lasting) && !repeat) law.en = 1.0;
   return law;
 }
 

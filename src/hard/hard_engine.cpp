@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "pdamp/errors.hpp"
@@ -143,7 +144,24 @@ std::vector<std::string> HardEngine::warnings() const {
   return {text.str()};
 }
 
-EngineStatistics HardEngine::statistics() const { return books_.counts.named(); }
+EngineStatistics HardEngine::statistics() const {
+  EngineStatistics named = books_.counts.named();
+  if (diagnosis_) {
+    const EngineStatistics diagnosed = diagnosis_->named();
+    named.insert(named.end(), diagnosed.begin(), diagnosed.end());
+  }
+  return named;
+}
+
+void HardEngine::diagnose(EventDiagnosis::Kind kind, int i, int partner, double approach_m_s) {
+  const PackedParticles& particles = flight_.particles();
+  const double mi = particles.mass_kg[i];
+  const double effective_mass_kg =
+      partner < 0 ? mi : mi * particles.mass_kg[partner] / (mi + particles.mass_kg[partner]);
+  const double partner_previous_s = kind == EventDiagnosis::sphere_sphere ? flight_.sphere(partner).last_collision_s
+                                                                          : std::numeric_limits<double>::quiet_NaN();
+  diagnosis_->note(kind, t_s_, approach_m_s, effective_mass_kg, flight_.sphere(i).last_collision_s, partner_previous_s);
+}
 
 double HardEngine::max_overlap_m() const {
   const HostState host = host_.trajectory().at(t_s_);
@@ -238,13 +256,25 @@ void HardEngine::handle(const Event& e) {
   }
 }
 
-HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, int j) {
+HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, int j, int rider) {
   // A sphere wedged between two bodies collides again at the same instant (ContactLaws).
   SphereState& a = flight_.sphere(i);
   const bool repeat = a.last_collision_s == t_s_ || (j >= 0 && flight_.sphere(j).last_collision_s == t_s_);
+  const bool lasting = laws_.tc_model() && within_tc_window(approach_speed_m_s, wall, i, j, rider);
   a.last_collision_s = t_s_;
   if (j >= 0) flight_.sphere(j).last_collision_s = t_s_;
-  return laws_.at(approach_speed_m_s, wall, repeat);
+  return laws_.at(approach_speed_m_s, wall, repeat, lasting);
+}
+
+bool HardEngine::within_tc_window(double approach_speed_m_s, bool wall, int i, int j, int rider) const {
+  const PackedParticles& particles = flight_.particles();
+  const int partner = j >= 0 ? j : rider;
+  const double mi = particles.mass_kg[i];
+  const double effective_mass_kg =
+      partner < 0 ? mi : mi * particles.mass_kg[partner] / (mi + particles.mass_kg[partner]);
+  const double previous_s = j >= 0 ? std::max(flight_.sphere(i).last_collision_s, flight_.sphere(j).last_collision_s)
+                                   : flight_.sphere(i).last_collision_s;
+  return laws_.within_tc_window(t_s_ - previous_s, effective_mass_kg, wall, approach_speed_m_s);
 }
 
 void HardEngine::collide_spheres(int i, int j) {
@@ -267,6 +297,8 @@ void HardEngine::collide_spheres(int i, int j) {
       dv + (ri * particles.angular_velocity_rad_s.col(i) + rj * particles.angular_velocity_rad_s.col(j)).cross(n);
   const double mi = particles.mass_kg[i], mj = particles.mass_kg[j];
   const double approach = dv.dot(n);
+  if (diagnosis_) [[unlikely]]
+    diagnose(EventDiagnosis::sphere_sphere, i, j, approach);
   const HardContactLaw law = law_for(approach, false, i, j);
   const CollisionOutcome out = walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj), law);
   const Eigen::Vector3d& p = out.impulse_N_s;
@@ -344,6 +376,8 @@ void HardEngine::collide_wall(int i, EventKind wall) {
   // As predicted: the cap's gap rate ∓(v_z − v_h), the side wall's x·v in the plane.
   const double approach = side_wall ? x.head<2>().dot(dv.head<2>()) / x.head<2>().norm()
                                     : n.z() * (particles.velocity_m_s(2, i) - host.v_m_s);
+  if (diagnosis_) [[unlikely]]
+    diagnose(side_wall ? EventDiagnosis::side_wall : EventDiagnosis::cap, i, -1, approach);
   const HardContactLaw law = law_for(approach, true, i, -1);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
   apply_host_impulse(i, n, out, host);
@@ -388,7 +422,9 @@ void HardEngine::collide_rider(int i, int j) {
     return;
   }
   const Mobility mobility = sphere_mobility(particles.mass_kg[i]) + Mobility{0, 0, host_.inverse_mass_1_kg()};
-  const HardContactLaw law = law_for(approach, false, i, -1);
+  if (diagnosis_) [[unlikely]]
+    diagnose(EventDiagnosis::rider, i, j, approach);
+  const HardContactLaw law = law_for(approach, false, i, -1, j);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
   apply_host_impulse(i, n, out, host, j);
   rest_if_slow(i, -n, host_.trajectory().at(t_s_));

@@ -26,7 +26,7 @@ class Collision {
     mass_ = p.density_kg_m3 * 4.0 / 3.0 * std::numbers::pi * radius_ * radius_ * radius_;
     const SoftContactLaw& law = against_wall ? scenario.soft_wall : scenario.soft_particle;
     const double effective_mass = against_wall ? mass_ : 0.5 * mass_;
-    contact_time_s_ = soft::hertz_contact_time_s(effective_mass, law.kn_N_m1_5, normal_speed_m_s);
+    contact_time_s_ = hertz_contact_time_s(effective_mass, law.kn_N_m1_5, normal_speed_m_s);
 
     setting_ = scenario;
     setting_.gravity_m_s2.setZero();

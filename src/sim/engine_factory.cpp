@@ -16,12 +16,14 @@ namespace {
 std::string describe_soft(const Scenario& scenario) { return "time step " + soft::describe_time_step(scenario); }
 std::string describe_hard(const Scenario&) { return "event-driven, no time step"; }
 
-std::unique_ptr<Engine> make_soft(const Scenario& scenario, const Particles& initial, const RestitutionTable*) {
+std::unique_ptr<Engine> make_soft(const Scenario& scenario, const Particles& initial, const RestitutionTable*, bool) {
   return std::make_unique<soft::SoftEngine>(scenario, initial);
 }
 std::unique_ptr<Engine> make_hard(const Scenario& scenario, const Particles& initial,
-                                  const RestitutionTable* calibration) {
-  return std::make_unique<hard::HardEngine>(scenario, initial, calibration);
+                                  const RestitutionTable* calibration, bool diagnose_events) {
+  auto engine = std::make_unique<hard::HardEngine>(scenario, initial, calibration);
+  if (diagnose_events) engine->diagnose_events(scenario);
+  return engine;
 }
 
 constexpr std::array<EngineKind, 2> kinds{{
@@ -57,9 +59,9 @@ void check_model_can_run(Model model, const Scenario& scenario) {
 }
 
 std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial,
-                                    const RestitutionTable* calibration) {
+                                    const RestitutionTable* calibration, bool diagnose_events) {
   if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
-  return engine_kind(model).make(scenario, initial, calibration);
+  return engine_kind(model).make(scenario, initial, calibration, diagnose_events);
 }
 
 }  // namespace pdamp

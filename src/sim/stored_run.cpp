@@ -19,7 +19,8 @@ std::unique_ptr<Engine> start_engine(RunStore& store, std::int64_t run_id, const
                                      const BedSource& bed_source) {
   const Scenario& scenario = *plan.scenario;
   const InitialBed& bed = bed_source();
-  auto engine = make_engine(plan.model, scenario, bed.particles, plan.calibration ? &*plan.calibration : nullptr);
+  auto engine = make_engine(plan.model, scenario, bed.particles, plan.calibration ? &*plan.calibration : nullptr,
+                            plan.diagnose_events);
   store.start_run(run_id, {engine->time_step_s() > 0 ? std::optional(engine->time_step_s()) : std::nullopt,
                            bed.state_id, solid_fraction(scenario.cavity, bed.particles)});
   if (plan.calibration && bed.particles.size() > 0) store.save_calibration(run_id, *plan.calibration);

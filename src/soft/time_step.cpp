@@ -12,12 +12,6 @@
 
 namespace pdamp::soft {
 
-double hertz_contact_time_s(double effective_mass_kg, double kn_N_m1_5, double impact_speed_m_s) {
-  const double max_overlap =
-      std::pow(5.0 * effective_mass_kg * impact_speed_m_s * impact_speed_m_s / (4.0 * kn_N_m1_5), 0.4);
-  return 2.9432 * max_overlap / impact_speed_m_s;
-}
-
 double max_impact_speed_m_s(const Scenario& scenario) {
   const HostModel host(scenario);
   const double host_speed = HostTrajectory(host, 0.0, host.initial_state()).speed_bound_m_s();

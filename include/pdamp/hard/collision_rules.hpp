@@ -67,13 +67,21 @@ class ContactLaws {
   /// slower than the elastic speed are elastic (which stops inelastic collapse in
   /// flight), unless a sphere involved has collided at this instant already (`repeat`:
   /// wedged between two bodies, the sequence must die out, not bounce for ever).
-  HardContactLaw at(double approach_speed_m_s, bool wall, bool repeat) const;
+  /// `lasting`: within the TC window of an earlier collision (within_tc_window), elastic too.
+  HardContactLaw at(double approach_speed_m_s, bool wall, bool repeat, bool lasting = false) const;
   double elastic_speed_m_s() const { return elastic_speed_m_s_; }
+  /// Whether the TC model is on (hard.tc_window > 0).
+  bool tc_model() const { return tc_window_ > 0.0; }
+  /// Whether a collision `since_s` after an earlier one of a sphere it involves falls within
+  /// the TC window: tc_window soft contact times of bodies of `effective_mass_kg` at this
+  /// approach speed (the wall's law for a wall).
+  bool within_tc_window(double since_s, double effective_mass_kg, bool wall, double approach_speed_m_s) const;
 
  private:
   HardContactLaw sphere_, wall_;
   std::optional<RestitutionTable> calibration_;
   double elastic_speed_m_s_;
+  double tc_window_, sphere_kn_N_m1_5_, wall_kn_N_m1_5_;
 };
 
 /// A perfectly inelastic collision of a body with the host in the vertical, the only

@@ -18,11 +18,13 @@
 /// - HardLedger: the energy books and the counts of events.
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "pdamp/hard/collision_rules.hpp"
+#include "pdamp/hard/event_diagnosis.hpp"
 #include "pdamp/hard/free_flight.hpp"
 #include "pdamp/hard/hard_ledger.hpp"
 #include "pdamp/hard/host_coupling.hpp"
@@ -58,14 +60,23 @@ class HardEngine final : public Engine {
   bool prefetching() const { return flight_.prefetching(); }
   /// Collisions processed so far (all kinds).
   std::int64_t collisions() const { return books_.counts.collisions(); }
+  /// From now on, counts where the collisions come from (EventDiagnosis) and adds the
+  /// counts to statistics().
+  void diagnose_events(const Scenario& scenario) { diagnosis_ = std::make_unique<EventDiagnosis>(scenario); }
 
  private:
   /// Lab-frame position of any sphere now (free or riding).
   Eigen::Vector3d position_now(int i, const HostState& host) const;
-  /// The law of a collision of i with j (−1 for a wall or rider) at this approach speed
-  /// (ContactLaws); records the collision's time.
-  HardContactLaw law_for(double approach_speed_m_s, bool wall, int i, int j);
+  /// The law of a collision of i with j (−1 for a wall or rider; `rider`, the rider) at
+  /// this approach speed (ContactLaws); records the collision's time.
+  HardContactLaw law_for(double approach_speed_m_s, bool wall, int i, int j, int rider = -1);
+  /// Whether the collision of i with j (or `rider`, or a wall) falls within the TC window
+  /// of an earlier collision of i or j (before law_for records this one).
+  [[gnu::noinline]] bool within_tc_window(double approach_speed_m_s, bool wall, int i, int j, int rider) const;
 
+  /// Tells the diagnosis of a collision of `kind` of sphere i with sphere `partner` (a
+  /// free one for sphere_sphere, a rider for rider; −1 a wall), before law_for records it.
+  [[gnu::cold, gnu::noinline]] void diagnose(EventDiagnosis::Kind kind, int i, int partner, double approach_m_s);
   /// Throws Interrupted on a stop request and RuntimeFailure past run.max_events.
   [[gnu::cold, gnu::noinline]] void poll();
 
@@ -122,6 +133,7 @@ class HardEngine final : public Engine {
   std::int64_t events_ = 0;
   std::int64_t max_events_;
   std::int64_t next_poll_;
+  std::unique_ptr<EventDiagnosis> diagnosis_;  ///< null unless diagnose_events()
 };
 
 }  // namespace pdamp::hard

@@ -25,7 +25,7 @@ struct EngineKind {
   /// What `pdamp check` prints of the engine for a scenario with spheres (e.g. its step).
   std::string (*describe)(const Scenario& scenario);
   std::unique_ptr<Engine> (*make)(const Scenario& scenario, const Particles& initial,
-                                  const RestitutionTable* calibration);
+                                  const RestitutionTable* calibration, bool diagnose_events);
 };
 
 /// Every engine, soft first.
@@ -50,9 +50,10 @@ void check_model_can_run(Model model, const Scenario& scenario);
 /// The engine of `model` for the scenario, starting from `initial` (a placement or a
 /// settled bed) with the host in its initial condition. A scenario without particles
 /// runs the host alone on its exact solution, whatever the model. The hard model takes
-/// `calibration` when the scenario asks for calibrated restitution. Throws InputError for
-/// a scenario the engine cannot run.
+/// `calibration` when the scenario asks for calibrated restitution, and counts where its
+/// collisions come from if asked to (`diagnose_events`, HardEngine::diagnose_events).
+/// Throws InputError for a scenario the engine cannot run.
 std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial,
-                                    const RestitutionTable* calibration = nullptr);
+                                    const RestitutionTable* calibration = nullptr, bool diagnose_events = false);
 
 }  // namespace pdamp

@@ -27,6 +27,9 @@ struct RunPlan {
   const Scenario* scenario;
   std::optional<RestitutionTable> calibration;  ///< the hard model's, when calibrated
   std::optional<SnapshotSettings> snapshots;    ///< checked against the scenario
+  /// The hard engine counts where its collisions come from into its statistics
+  /// (hard/event_diagnosis.hpp); the results are the same bits.
+  bool diagnose_events = false;
 };
 
 /// Checks that `model` can run `scenario` (check_model_can_run) with these snapshots

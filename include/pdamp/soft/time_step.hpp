@@ -1,7 +1,7 @@
 #pragma once
 /// The soft engine's time step. A Hertz contact f = k_n δ^{3/2} between bodies of
 /// effective mass m* hit at speed v lasts t_c = 2.9432 δ_max / v with
-/// δ_max = (5 m* v² / 4 k_n)^{2/5} (the dashpot only shortens it). The step must resolve
+/// δ_max = (5 m* v² / 4 k_n)^{2/5} (hertz_contact_time_s; the dashpot only shortens it). The step must resolve
 /// the shortest contact the scenario can produce: the lightest pair, the stiffest law,
 /// the fastest impact.
 ///
@@ -39,6 +39,7 @@
 
 #include <string>
 
+#include "pdamp/model/hertz_contact.hpp"
 #include "pdamp/scenario/scenario.hpp"
 
 namespace pdamp::soft {
@@ -49,9 +50,6 @@ constexpr double steps_per_tangential_period_auto = 8.0;
 constexpr double steps_per_tangential_period_minimum = 4.0;
 constexpr double steps_per_relaxation_auto = 10.0;
 constexpr double steps_per_relaxation_minimum = 2.0;
-
-/// Duration of an undamped Hertz contact (s).
-double hertz_contact_time_s(double effective_mass_kg, double kn_N_m1_5, double impact_speed_m_s);
 
 /// The fastest impact the scenario can produce (m/s), see above.
 double max_impact_speed_m_s(const Scenario& scenario);

@@ -1,0 +1,128 @@
+/// Dense beds on the hard engine: the opt-in diagnosis of where its collisions come from
+/// (EventDiagnosis: its decades, a bouncing ball whose intervals are known in closed form,
+/// and that asking for it changes no result), and the TC model (hard.tc_window).
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include "pdamp/hard/event_diagnosis.hpp"
+#include "pdamp/hard/hard_engine.hpp"
+#include "pdamp/model/hertz_contact.hpp"
+#include "pdamp/model/placement.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using hard::EventDiagnosis;
+using hard::HardEngine;
+
+TEST_CASE("diagnosis: intervals fall into decades of the contact time, speeds into decades of m/s") {
+  const double tc = 1e-5;
+  CHECK(EventDiagnosis::interval_of(0.0, tc) == EventDiagnosis::same_instant);
+  CHECK(EventDiagnosis::interval_of(0.5e-7, tc) == EventDiagnosis::below_0_01);
+  CHECK(EventDiagnosis::interval_of(1e-7, tc) == EventDiagnosis::below_0_1);
+  CHECK(EventDiagnosis::interval_of(0.9e-5, tc) == EventDiagnosis::below_1);
+  CHECK(EventDiagnosis::interval_of(1e-5, tc) == EventDiagnosis::below_10);
+  CHECK(EventDiagnosis::interval_of(5e-4, tc) == EventDiagnosis::below_100);
+  CHECK(EventDiagnosis::interval_of(1e-3, tc) == EventDiagnosis::at_least_100);
+  CHECK(EventDiagnosis::interval_of(std::numeric_limits<double>::infinity(), tc) == EventDiagnosis::first);
+  CHECK(EventDiagnosis::speed_bin_of(0.5e-4) == 0);
+  CHECK(EventDiagnosis::speed_bin_of(1e-4) == 1);
+  CHECK(EventDiagnosis::speed_bin_of(0.05) == 3);
+  CHECK(EventDiagnosis::speed_bin_of(0.99) == 4);
+  CHECK(EventDiagnosis::speed_bin_of(30.0) == 5);
+}
+
+TEST_CASE("diagnosis: an elastic ball bouncing on a fixed floor collides every 2v/g, about 100 contact times") {
+  // Dropped from 5 mm: v = sqrt(2 g h) = 0.313 m/s, bounces every 2v/g = 63.9 ms; the soft
+  // wall law's contact at that speed lasts t_c ≈ 0.6 ms.
+  const Scenario s = test::fixed_walls(
+      "[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 1\n"
+      "[hard_wall]\nen = 1\n");
+  const double h_m = 0.005, r_m = 0.0005;
+  const Particles ball = test::spheres({{0.0, 0.0, r_m + h_m}}, {{0.0, 0.0, 0.0}}, r_m);
+  const double v = std::sqrt(2 * 9.81 * h_m), period_s = 2 * v / 9.81;
+  const double tc = hertz_contact_time_s(ball.mass_kg[0], s.soft_wall.kn_N_m1_5, v);
+  REQUIRE(period_s / tc > 100);
+  HardEngine engine(s, ball);
+  engine.diagnose_events(s);
+  engine.advance_to(1.0);
+  const std::int64_t bounces = test::statistic(engine, "events_cap");
+  CHECK(bounces == static_cast<std::int64_t>(std::floor((1.0 - period_s / 2) / period_s)) + 1);
+  CHECK(test::statistic(engine, "diagnosis_cap_dt_first") == 1);
+  CHECK(test::statistic(engine, "diagnosis_cap_dt_above_100tc") == bounces - 1);
+  CHECK(test::statistic(engine, "diagnosis_cap_within_tc") == 0);
+  CHECK(test::statistic(engine, "diagnosis_cap_v_1e-1_1") == bounces);
+  CHECK(test::statistic(engine, "diagnosis_sphere_sphere_dt_first") == 0);
+}
+
+TEST_CASE("diagnosis: asking for it changes no result, and it sees every collision that has a law") {
+  const Scenario s = load_scenario(test::scenario_file("small"), {"run.duration_s=0.05"});
+  const Particles initial = place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m);
+  HardEngine plain(s, initial), diagnosed(s, initial);
+  diagnosed.diagnose_events(s);
+  for (int k = 1; k <= 50; ++k) {
+    plain.advance_to(0.001 * k);
+    diagnosed.advance_to(0.001 * k);
+    REQUIRE(plain.observe().energy.dissipated_impact_J == diagnosed.observe().energy.dissipated_impact_J);
+  }
+  CHECK(plain.state().particles.position_m == diagnosed.state().particles.position_m);
+  EngineStatistics counts = diagnosed.statistics();
+  const EngineStatistics plain_counts = plain.statistics();
+  REQUIRE(counts.size() > plain_counts.size());
+  CHECK(EngineStatistics(counts.begin(), counts.begin() + static_cast<std::ptrdiff_t>(plain_counts.size())) ==
+        plain_counts);
+
+  // Each collision is counted once by its approach speed, and each sphere in it once by
+  // its interval. A knocked-off rider's collision is one of two free spheres.
+  auto sum = [&](const std::string& kind, const std::string& measure_prefix) {
+    std::int64_t total = 0;
+    for (const auto& [name, value] : counts) {
+      if (name.rfind("diagnosis_" + kind + "_" + measure_prefix, 0) == 0) total += value;
+    }
+    return total;
+  };
+  const auto stat = [&](const char* name) { return test::statistic(diagnosed, name); };
+  REQUIRE(stat("jam_merges") == 0);
+  REQUIRE(stat("bed_jammed") == 0);
+  CHECK(sum("sphere_sphere", "v_") == stat("events_sphere_sphere") + stat("bed_knock_offs"));
+  CHECK(sum("sphere_sphere", "dt_") == 2 * sum("sphere_sphere", "v_"));
+  CHECK(sum("side_wall", "v_") == stat("events_wall"));
+  CHECK(sum("side_wall", "dt_") == stat("events_wall"));
+  CHECK(sum("cap", "v_") == stat("events_cap"));
+  CHECK(sum("rider", "v_") == stat("events_rider") - stat("bed_knock_offs"));
+  CHECK(sum("sphere_sphere", "v_") > 0);
+  CHECK(sum("cap", "v_") > 0);
+}
+
+namespace {
+
+/// A ball of 1 mm dropped from 5 mm onto the fixed floor of a wall law with e_n = 0.5 and
+/// the TC window `tc_window`; its energy lost by impact after `duration_s`.
+double ball_impact_loss_J(double tc_window, double duration_s) {
+  Scenario s = test::fixed_walls(
+      "[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 1\n"
+      "[hard_wall]\nen = 0.5\n");
+  s.hard_resting.tc_window = tc_window;
+  HardEngine engine(s, test::spheres({{0.0, 0.0, 0.0055}}, {{0.0, 0.0, 0.0}}, 0.0005));
+  engine.advance_to(duration_s);
+  CHECK(engine.observe().energy.dissipated_friction_J == 0.0);
+  return engine.observe().energy.dissipated_impact_J;
+}
+
+}  // namespace
+
+TEST_CASE("TC model: a collision within the window of the sphere's last one is elastic, the first one is not") {
+  // The first impact at v = sqrt(2 g h) loses (1 − e²) of the ball's kinetic energy.
+  const double mass_kg = 9000 * 4.0 / 3.0 * std::numbers::pi * 0.0005 * 0.0005 * 0.0005;
+  const double first_loss_J = 0.5 * mass_kg * 2 * 9.81 * 0.005 * (1 - 0.5 * 0.5);
+  // Off: the ball bounces lower and lower; its first bounce lasts 2 e v / g = 32 ms.
+  CHECK(ball_impact_loss_J(0.0, 0.1) > 1.2 * first_loss_J);
+  // A window of 10^3 t_c (t_c ≈ 0.6 ms at 0.3 m/s, shorter at lower speed): every later
+  // bounce falls within it and is elastic.
+  CHECK(ball_impact_loss_J(1e3, 0.1) == doctest::Approx(first_loss_J).epsilon(1e-9));
+  // A window of one t_c holds no bounce of this ball: the TC model changes nothing here.
+  CHECK(ball_impact_loss_J(1.0, 0.1) == ball_impact_loss_J(0.0, 0.1));
+}

@@ -19,18 +19,22 @@ using hard::EventDiagnosis;
 using hard::HardEngine;
 
 TEST_CASE("diagnosis: intervals fall into decades of the contact time, speeds into decades of m/s") {
-  const double tc = 1e-5;
+  // A contact time of 1 s puts each decade's lower edge at a number the ratio keeps exactly.
+  const double tc = 1.0;
   CHECK(EventDiagnosis::interval_of(0.0, tc) == EventDiagnosis::same_instant);
-  CHECK(EventDiagnosis::interval_of(0.5e-7, tc) == EventDiagnosis::below_0_01);
-  CHECK(EventDiagnosis::interval_of(1e-7, tc) == EventDiagnosis::below_0_1);
-  CHECK(EventDiagnosis::interval_of(0.9e-5, tc) == EventDiagnosis::below_1);
-  CHECK(EventDiagnosis::interval_of(1e-5, tc) == EventDiagnosis::below_10);
-  CHECK(EventDiagnosis::interval_of(5e-4, tc) == EventDiagnosis::below_100);
-  CHECK(EventDiagnosis::interval_of(1e-3, tc) == EventDiagnosis::at_least_100);
+  CHECK(EventDiagnosis::interval_of(0.005, tc) == EventDiagnosis::below_0_01);
+  CHECK(EventDiagnosis::interval_of(0.01, tc) == EventDiagnosis::below_0_1);
+  CHECK(EventDiagnosis::interval_of(0.9, tc) == EventDiagnosis::below_1);
+  CHECK(EventDiagnosis::interval_of(1.0, tc) == EventDiagnosis::below_10);
+  CHECK(EventDiagnosis::interval_of(50.0, tc) == EventDiagnosis::below_100);
+  CHECK(EventDiagnosis::interval_of(100.0, tc) == EventDiagnosis::at_least_100);
+  CHECK(EventDiagnosis::interval_of(2e-7, 1e-5) == EventDiagnosis::below_0_1);
   CHECK(EventDiagnosis::interval_of(std::numeric_limits<double>::infinity(), tc) == EventDiagnosis::first);
   CHECK(EventDiagnosis::speed_bin_of(0.5e-4) == 0);
   CHECK(EventDiagnosis::speed_bin_of(1e-4) == 1);
+  CHECK(EventDiagnosis::speed_bin_of(1e-3) == 2);
   CHECK(EventDiagnosis::speed_bin_of(0.05) == 3);
+  CHECK(EventDiagnosis::speed_bin_of(1.0) == 5);
   CHECK(EventDiagnosis::speed_bin_of(0.99) == 4);
   CHECK(EventDiagnosis::speed_bin_of(30.0) == 5);
 }

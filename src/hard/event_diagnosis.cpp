@@ -1,5 +1,6 @@
 #include "pdamp/hard/event_diagnosis.hpp"
 
+#include <array>
 #include <cmath>
 
 #include "pdamp/model/hertz_contact.hpp"
@@ -32,8 +33,9 @@ EventDiagnosis::Interval EventDiagnosis::interval_of(double since_previous_s, do
 }
 
 std::size_t EventDiagnosis::speed_bin_of(double approach_m_s) {
+  constexpr std::array<double, speed_bins - 1> lower_edges_m_s{1e-4, 1e-3, 1e-2, 1e-1, 1.0};
   std::size_t bin = 0;
-  for (double edge = 1e-4; bin + 1 < speed_bins && approach_m_s >= edge; edge *= 10.0) ++bin;
+  while (bin < lower_edges_m_s.size() && approach_m_s >= lower_edges_m_s[bin]) ++bin;
   return bin;
 }
 

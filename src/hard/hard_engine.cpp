@@ -256,7 +256,7 @@ void HardEngine::handle(const Event& e) {
   }
 }
 
-HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, int j, int rider) {
+inline HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, int j, int rider) {
   // A sphere wedged between two bodies collides again at the same instant (ContactLaws).
   SphereState& a = flight_.sphere(i);
   const bool repeat = a.last_collision_s == t_s_ || (j >= 0 && flight_.sphere(j).last_collision_s == t_s_);

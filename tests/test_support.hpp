@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "engine_models.hpp"
 #include "pdamp/hard/event_queue.hpp"
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
@@ -21,14 +22,6 @@
 #include "pdamp/sim/engine_factory.hpp"
 
 namespace pdamp::test {
-
-/// The models, for tests that run one body on both engines (TEST_CASE_TEMPLATE).
-struct SoftModel {
-  static constexpr Model model = Model::soft;
-};
-struct HardModel {
-  static constexpr Model model = Model::hard;
-};
 
 inline std::filesystem::path source_dir() { return PDAMP_SOURCE_DIR; }
 inline std::filesystem::path scenario_file(const std::string& name) {

@@ -1,6 +1,7 @@
 #include "pdamp/scenario/scenario_loader.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <functional>
@@ -9,6 +10,7 @@
 #include <numbers>
 #include <ostream>
 #include <set>
+#include <span>
 #include <sstream>
 #include <string_view>
 #include <utility>
@@ -104,30 +106,36 @@ std::string work_limit_text(std::int64_t n) {
   return rest == 1 && exponent > 0 ? "1e" + std::to_string(exponent) : std::to_string(n);
 }
 
-/// The words a key of named choices accepts, in the order messages list them.
+/// The words a key of named choices accepts, in the order messages list them. Constant
+/// tables: key_specs() may first run while other files' statics are initialised.
 template <class Choice>
-using Names = std::vector<std::pair<std::string, Choice>>;
+using Names = std::span<const std::pair<std::string_view, Choice>>;
 
 template <class Choice>
 Choice parse_choice(const Value& v, const Names<Choice>& names) {
   const auto it = std::find_if(names.begin(), names.end(), [&](const auto& entry) { return entry.first == v.text; });
   if (it != names.end()) return it->second;
   std::string valid;
-  for (const auto& [name, choice] : names) valid += (valid.empty() ? "" : ", ") + name;
+  for (const auto& [name, choice] : names) {
+    if (!valid.empty()) valid += ", ";
+    valid += name;
+  }
   reject(v, "must be one of " + valid);
 }
 
 template <class Choice>
 std::string name_of(Choice choice, const Names<Choice>& names) {
-  return std::find_if(names.begin(), names.end(), [&](const auto& entry) { return entry.second == choice; })->first;
+  return std::string(
+      std::find_if(names.begin(), names.end(), [&](const auto& entry) { return entry.second == choice; })->first);
 }
 
-const Names<ExcitationMode> excitation_modes{{"free", ExcitationMode::free_decay},
-                                             {"base", ExcitationMode::base_motion},
-                                             {"force", ExcitationMode::force},
-                                             {"prescribed", ExcitationMode::prescribed_motion}};
-const Names<HardRestitution> restitutions{{"constant", HardRestitution::constant},
-                                          {"calibrated", HardRestitution::calibrated}};
+constexpr std::array<std::pair<std::string_view, ExcitationMode>, 4> excitation_modes{
+    {{"free", ExcitationMode::free_decay},
+     {"base", ExcitationMode::base_motion},
+     {"force", ExcitationMode::force},
+     {"prescribed", ExcitationMode::prescribed_motion}}};
+constexpr std::array<std::pair<std::string_view, HardRestitution>, 2> restitutions{
+    {{"constant", HardRestitution::constant}, {"calibrated", HardRestitution::calibrated}}};
 
 using Apply = std::function<void(Scenario&, const Value&)>;
 
@@ -237,10 +245,11 @@ const std::vector<KeySpec>& key_specs() {
          number(PDAMP_FIELD(host.z0_m), any_number), ""},
         {"host.v0_m_s", text(d.host.v0_m_s), "m/s", "initial host velocity",
          number(PDAMP_FIELD(host.v0_m_s), any_number), ""},
-        {"excitation.mode", name_of(d.excitation.mode, excitation_modes), "",
+        {"excitation.mode", name_of<ExcitationMode>(d.excitation.mode, excitation_modes), "",
          "free (decay) | base (base motion y = A sin(wt+phi) through K and C) | force (F0 sin(wt+phi) on the "
          "host) | prescribed (host moves as z = A sin(wt+phi), infinite mass)",
-         [](Scenario& s, const Value& v) { s.excitation.mode = parse_choice(v, excitation_modes); }, ""},
+         [](Scenario& s, const Value& v) { s.excitation.mode = parse_choice<ExcitationMode>(v, excitation_modes); },
+         ""},
         {"excitation.amplitude_m", text(d.excitation.amplitude_m), "m",
          "motion amplitude A (base and prescribed modes)", number(PDAMP_FIELD(excitation.amplitude_m), non_negative),
          ""},
@@ -336,10 +345,11 @@ const std::vector<KeySpec>& key_specs() {
     for (auto& spec : soft_law_keys("soft", &Scenario::soft_particle, "")) k.push_back(spec);
     for (auto& spec : soft_law_keys("soft_wall", &Scenario::soft_wall, "soft")) k.push_back(spec);
     for (auto& spec : hard_law_keys("hard", &Scenario::hard_particle, "")) k.push_back(spec);
-    k.push_back({"hard.restitution", name_of(d.hard_restitution, restitutions), "",
-                 "constant (en and beta0 as given) | calibrated (e_n(v) and beta0(v) of the soft law, from "
-                 "isolated soft collisions at the impact speed)",
-                 [](Scenario& s, const Value& v) { s.hard_restitution = parse_choice(v, restitutions); }, ""});
+    k.push_back(
+        {"hard.restitution", name_of<HardRestitution>(d.hard_restitution, restitutions), "",
+         "constant (en and beta0 as given) | calibrated (e_n(v) and beta0(v) of the soft law, from "
+         "isolated soft collisions at the impact speed)",
+         [](Scenario& s, const Value& v) { s.hard_restitution = parse_choice<HardRestitution>(v, restitutions); }, ""});
     // The hard engine's resting-bed parameters (docs/hard-engine.md, "Resting beds and inelastic collapse").
     k.push_back({"hard.rest_speed_m_s", text(d.hard_resting.rest_speed_m_s), "m/s",
                  "a sphere leaving the floor, top cap or a resting sphere slower than this (relative to the host) "

@@ -39,13 +39,7 @@ Particles moving(const Scenario& s, double speed_m_s, double spin_rad_s) {
 
 TEST_CASE_TEMPLATE("contract: E(0) + W = E + D in every excitation mode, each sphere's share adding up", M, SoftModel,
                    HardModel) {
-  const std::vector<ScenarioOverrides> modes = {
-      {},
-      {"excitation.mode=prescribed", "excitation.amplitude_m=0.001", "excitation.frequency_hz=30"},
-      {"excitation.mode=base", "excitation.amplitude_m=0.002", "excitation.frequency_hz=22"},
-      {"excitation.mode=force", "excitation.force_N=2", "excitation.frequency_hz=15"},
-  };
-  for (const auto& mode : modes) {
+  for (const auto& mode : test::excitation_modes()) {
     CAPTURE(mode.empty() ? std::string("free") : mode[0]);
     const Scenario s = load_scenario(test::scenario_file("small"), mode);
     const auto engine = make_engine(M::model, s, placed(s));
@@ -78,13 +72,7 @@ TEST_CASE_TEMPLATE("contract: one thread or two, the same bits", M, SoftModel, H
   const State one = run_on(1), two = run_on(2);
   omp_set_num_threads(before);
   CHECK(one.observation.energy.dissipated_impact_J > 0);
-  CHECK(one.particles.position_m == two.particles.position_m);
-  CHECK(one.particles.velocity_m_s == two.particles.velocity_m_s);
-  CHECK(one.particles.angular_velocity_rad_s == two.particles.angular_velocity_rad_s);
-  CHECK(one.observation.host.z_m == two.observation.host.z_m);
-  CHECK(one.observation.energy.dissipated_impact_J == two.observation.energy.dissipated_impact_J);
-  CHECK(one.observation.energy.dissipated_friction_J == two.observation.energy.dissipated_friction_J);
-  CHECK(one.observation.energy.contact_elastic_J == two.observation.energy.contact_elastic_J);
+  test::check_same_state(one, two);
 }
 
 TEST_CASE_TEMPLATE("contract: spheres and a free host conserve vertical momentum", M, SoftModel, HardModel) {

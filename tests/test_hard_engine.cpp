@@ -197,13 +197,7 @@ TEST_CASE("angular momentum about the origin is conserved by a frictional sphere
 
 // The energy books in every mode are the contract's (test_engine_contract.cpp).
 TEST_CASE("no overlaps in any excitation mode") {
-  const std::vector<ScenarioOverrides> modes = {
-      {},
-      {"excitation.mode=prescribed", "excitation.amplitude_m=0.001", "excitation.frequency_hz=30"},
-      {"excitation.mode=base", "excitation.amplitude_m=0.002", "excitation.frequency_hz=22"},
-      {"excitation.mode=force", "excitation.force_N=2", "excitation.frequency_hz=15"},
-  };
-  for (const auto& mode : modes) {
+  for (const auto& mode : test::excitation_modes()) {
     CAPTURE(mode.empty() ? std::string("free") : mode[0]);
     const Scenario s = load_scenario(test::scenario_file("small"), mode);
     HardEngine engine(s, placed(s));

@@ -380,13 +380,7 @@ TEST_CASE("SIMD paths: every instruction set the CPU runs gives the same bits") 
     ++compared;
     CAPTURE(to_string(path));
     const State other = run_on(path);
-    CHECK(other.particles.position_m == reference.particles.position_m);
-    CHECK(other.particles.velocity_m_s == reference.particles.velocity_m_s);
-    CHECK(other.particles.angular_velocity_rad_s == reference.particles.angular_velocity_rad_s);
-    CHECK(other.observation.host.z_m == reference.observation.host.z_m);
-    CHECK(other.observation.energy.dissipated_impact_J == reference.observation.energy.dissipated_impact_J);
-    CHECK(other.observation.energy.dissipated_friction_J == reference.observation.energy.dissipated_friction_J);
-    CHECK(other.observation.energy.contact_elastic_J == reference.observation.energy.contact_elastic_J);
+    test::check_same_state(other, reference);
   }
   // CTest reports a test whose output says [skipped] as skipped (tests/CMakeLists.txt).
   if (compared == 0) MESSAGE("[skipped] this build or CPU runs sse2 only: no other path to compare with");

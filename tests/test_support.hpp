@@ -49,6 +49,28 @@ inline void check_dissipation_by_sphere(const Engine& engine) {
   CHECK(std::abs(by_sphere.friction_J.sum() - ledger.dissipated_friction_J) <= 1e-12 * total_J);
 }
 
+/// The four excitation modes on small.ini's host, each with a drive that shakes its bed
+/// ({} is the free decay): for tests that hold in every mode.
+inline std::vector<ScenarioOverrides> excitation_modes() {
+  return {
+      {},
+      {"excitation.mode=prescribed", "excitation.amplitude_m=0.001", "excitation.frequency_hz=30"},
+      {"excitation.mode=base", "excitation.amplitude_m=0.002", "excitation.frequency_hz=22"},
+      {"excitation.mode=force", "excitation.force_N=2", "excitation.frequency_hz=15"},
+  };
+}
+
+/// Two engine states are the same bits: spheres, host and the energy books.
+inline void check_same_state(const State& a, const State& b) {
+  CHECK(a.particles.position_m == b.particles.position_m);
+  CHECK(a.particles.velocity_m_s == b.particles.velocity_m_s);
+  CHECK(a.particles.angular_velocity_rad_s == b.particles.angular_velocity_rad_s);
+  CHECK(a.observation.host.z_m == b.observation.host.z_m);
+  CHECK(a.observation.energy.dissipated_impact_J == b.observation.energy.dissipated_impact_J);
+  CHECK(a.observation.energy.dissipated_friction_J == b.observation.energy.dissipated_friction_J);
+  CHECK(a.observation.energy.contact_elastic_J == b.observation.energy.contact_elastic_J);
+}
+
 /// A scenario from inline text (every unspecified key takes its default).
 inline Scenario scenario_from(const std::string& text, const ScenarioOverrides& overrides = {}) {
   return parse_scenario(text, "test", "test scenario", overrides);

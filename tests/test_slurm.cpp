@@ -30,6 +30,36 @@ TEST_CASE("array ranges join consecutive tasks") {
   CHECK(array_ranges({}).empty());
 }
 
+TEST_CASE("a task finds its point in the array's list of points, which is never expanded") {
+  const std::string points = array_ranges({2, 3, 4, 9, 1500, 1501});
+  const std::vector<std::int64_t> expected{2, 3, 4, 9, 1500, 1501};
+  for (std::size_t task = 0; task < expected.size(); ++task) {
+    CHECK(nth_in_ranges(points, static_cast<std::int64_t>(task), 2000) == expected[task]);
+  }
+  // A range of a billion points is walked, not expanded.
+  CHECK(nth_in_ranges("1-1000000000", 999'999'999, 1'000'000'000) == 1'000'000'000);
+  CHECK_THROWS_WITH_AS(nth_in_ranges(points, 6, 2000), doctest::Contains("it has 6 points, so no task 6"), InputError);
+  CHECK_THROWS_WITH_AS(nth_in_ranges(points, -1, 2000), doctest::Contains("no task -1"), InputError);
+  for (const char* bad : {"", "0", "3-2", "1,,2", "1-", "-4", "a", "2,1", "1-3,3", "1-2001", " 1"}) {
+    CAPTURE(bad);
+    CHECK_THROWS_WITH_AS(nth_in_ranges(bad, 0, 2000), doctest::Contains("the list of points '"), InputError);
+  }
+}
+
+TEST_CASE("points are split into job arrays the cluster's MaxArraySize takes") {
+  const auto chunks = array_chunks({7, 1, 2, 3, 5, 9, 8, 2}, 3);
+  REQUIRE(chunks.size() == 3);
+  CHECK(chunks[0] == std::vector<std::int64_t>{1, 2, 3});
+  CHECK(chunks[1] == std::vector<std::int64_t>{5, 7, 8});
+  CHECK(chunks[2] == std::vector<std::int64_t>{9});
+  CHECK(array_chunks({4, 5}, default_max_array_size).size() == 1);
+
+  CHECK(parse_max_array_size("Configuration data as of 2026-12-04T09:00:00\nMaxArraySize            = 40001\n"
+                             "MaxJobCount             = 10000\n") == 40001);
+  CHECK(parse_max_array_size("MaxJobCount = 10000\n") == std::nullopt);
+  CHECK(parse_max_array_size("MaxArraySize = many\n") == std::nullopt);
+}
+
 TEST_CASE("a study's shard folder names its files after the store, the study, the job and the task") {
   const ShardFolder folder("/data/x/../runs.sqlite", 3);
   CHECK(folder.path() == "/data/runs.sqlite.shards/study-3");
@@ -91,21 +121,22 @@ TEST_CASE("the Slurm options are checked, naming the option and what is valid") 
   }
 }
 
-TEST_CASE("the job script: one array task per point, throttled, with the options and the task command") {
+TEST_CASE("the job script: one array task per point, from 0, throttled, with the options and the task command") {
   JobScriptRequest request{7,
                            "fill study",
                            "/opt/pdamp's build/pdamp",
                            ShardFolder("/data/runs.sqlite", 7),
-                           {1, 2, 3, 5, 9},
+                           {9, 1, 2, 3, 5},
                            {"short", "lab", "1:00:00", 4, 2, "$TMPDIR"}};
   const std::string script = job_script(request);
   CHECK(script.starts_with("#!/bin/bash\n"));
   for (const char* line :
-       {"#SBATCH --job-name=pdamp-study-7\n", "#SBATCH --array=1-3,5,9%4\n", "#SBATCH --ntasks=1\n",
+       {"#SBATCH --job-name=pdamp-study-7\n", "#SBATCH --array=0-4%4\n", "#SBATCH --ntasks=1\n",
         "#SBATCH --cpus-per-task=2\n", "#SBATCH --output=/data/runs.sqlite.shards/study-7/logs/%A_%a.log\n",
         "#SBATCH --partition=short\n", "#SBATCH --account=lab\n", "#SBATCH --time=1:00:00\n",
         "\nexec '/opt/pdamp'\\''s build/pdamp' study task '/data/runs.sqlite.shards/study-7' --job "
-        "\"$SLURM_ARRAY_JOB_ID\" --task \"$SLURM_ARRAY_TASK_ID\" --threads \"${SLURM_CPUS_PER_TASK:-1}\" "
+        "\"$SLURM_ARRAY_JOB_ID\" --task \"$SLURM_ARRAY_TASK_ID\" --points 1-3,5,9 --threads "
+        "\"${SLURM_CPUS_PER_TASK:-1}\" "
         "--scratch \"$TMPDIR\"\n"}) {
     CAPTURE(line);
     CHECK(contains(script, line));
@@ -116,7 +147,7 @@ TEST_CASE("the job script: one array task per point, throttled, with the options
   // Options not given leave the cluster's defaults.
   request.options = {};
   const std::string plain = job_script(request);
-  CHECK(contains(plain, "#SBATCH --array=1-3,5,9\n"));
+  CHECK(contains(plain, "#SBATCH --array=0-4\n"));
   for (const char* absent : {"--partition", "--account", "--time", "--scratch"}) CHECK(!contains(plain, absent));
 
   // A folder that #SBATCH lines cannot hold is refused.
@@ -205,9 +236,10 @@ struct ShardedStudy {
     std::filesystem::create_directories(folder.logs());
     write_folder_study(folder, record);
   }
-  /// Runs task `task` of job `job` into its shard, as `pdamp study task` does.
-  ShardTaskResult task(std::int64_t job, std::int64_t task) const {
-    return run_shard_task({folder, job, task, {}}, study::PointRunControl{});
+  /// Runs point `point` as the task of that index of job `job` into its shard, as `pdamp
+  /// study task` does (any index may run any point; this one keeps the names readable).
+  ShardTaskResult task(std::int64_t job, std::int64_t point) const {
+    return run_shard_task({folder, job, point, point, {}}, study::PointRunControl{});
   }
   std::int64_t count(const std::string& sql) { return test::count_rows(db, sql); }
 
@@ -321,7 +353,7 @@ TEST_CASE("a stopped task ends its point as interrupted and still puts its shard
   std::atomic<bool> stop{true};
   study::PointRunControl control;
   control.stop = &stop;
-  const ShardTaskResult r = run_shard_task({s.folder, 8, 2, {}}, control);
+  const ShardTaskResult r = run_shard_task({s.folder, 8, 2, 2, {}}, control);
   CHECK(r.point.status == PointStatus::interrupted);
   CHECK(std::filesystem::exists(s.folder.shard(8, 2)));
   CHECK(!std::filesystem::exists(s.folder.unfinished(8, 2)));
@@ -335,9 +367,17 @@ TEST_CASE("a stopped task ends its point as interrupted and still puts its shard
   CHECK(s.count("SELECT count(*) FROM study_points WHERE point = 2 AND status = 'completed' AND attempt = 2") == 1);
   CHECK(s.count("SELECT count(*) FROM study_point_runs WHERE point = 2") == 2);
 
+  // A task that ran another point than its job was submitted to run is refused.
+  StudyStore(s.store).record_job(s.id, {80, "", "submit-3.sh", s.folder.path().string()}, {{0, 1}});
+  CHECK(run_shard_task({s.folder, 80, 0, 2, {}}, study::PointRunControl{}).point.status == PointStatus::completed);
+  const CollectReport mismatch = collect_shards(s.store, s.record, {s.folder});
+  CHECK(mismatch.merged.empty());
+  REQUIRE(mismatch.refused.size() == 1);
+  CHECK(contains(mismatch.refused[0], "ran point 2 as task 0 of job 80, which was submitted to run point 1"));
+
   // A task that is not a point of the study, or a folder without its study, writes nothing.
-  CHECK_THROWS_WITH_AS(s.task(9, 3), doctest::Contains("task 3: study 1 has points 1 to 2"), InputError);
-  CHECK_THROWS_WITH_AS(run_shard_task({ShardFolder(dir / "nowhere"), 1, 1, {}}, control),
+  CHECK_THROWS_WITH_AS(s.task(9, 3), doctest::Contains("task 3: point 3: study 1 has points 1 to 2"), InputError);
+  CHECK_THROWS_WITH_AS(run_shard_task({ShardFolder(dir / "nowhere"), 1, 1, 1, {}}, control),
                        doctest::Contains("is missing: a shard folder's study is written by 'pdamp study submit'"),
                        InputError);
   CHECK(!std::filesystem::exists(s.folder.unfinished(9, 3)));
@@ -347,7 +387,7 @@ TEST_CASE("a task writes its shard in scratch space and copies it to the folder 
   test::TempDir dir("slurm-scratch");
   ShardedStudy s(dir, "scratch", 2, "runs.sqlite");
   const auto scratch = dir / "node" / "tmp";
-  const ShardTaskResult r = run_shard_task({s.folder, 3, 1, scratch}, study::PointRunControl{});
+  const ShardTaskResult r = run_shard_task({s.folder, 3, 1, 1, scratch}, study::PointRunControl{});
   CHECK(r.point.status == PointStatus::completed);
   CHECK(std::filesystem::is_empty(scratch));
   CHECK(test::count_rows(s.folder.shard(3, 1), "SELECT count(*) FROM samples") == 101);

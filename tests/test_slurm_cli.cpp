@@ -33,23 +33,29 @@ std::string read(const std::filesystem::path& file) {
   return text.str();
 }
 
-/// sbatch, squeue and sacct stand-ins first in PATH while it lives. sbatch records each job
-/// script and answers job ids from 100 on (or refuses while `refuse` exists); squeue lists
-/// nothing and sacct answers as a cluster without slurmdbd, unless given an answer.
+/// sbatch, squeue, sacct and scontrol stand-ins first in PATH while it lives. sbatch records
+/// each job script and answers job ids from 100 on (or refuses while `refuse` is on, or from
+/// the job `refuse_from` names); squeue lists nothing and sacct answers as a cluster without
+/// slurmdbd, unless given an answer; scontrol tells a MaxArraySize of 1001 unless given one.
 class FakeSlurm {
  public:
   explicit FakeSlurm(const TempDir& dir) : bin_(dir / "bin"), path_(std::getenv("PATH")) {
     std::filesystem::create_directories(bin_);
     write(bin_ / "sbatch",
-          "#!/bin/sh\n[ \"$1\" = --parsable ] || exit 9\n"
-          "if [ -e \"$0.refuse\" ]; then echo 'sbatch: error: Invalid account' >&2; exit 1; fi\n"
-          "n=$(cat \"$0.next\" 2>/dev/null || echo 100)\necho $((n + 1)) > \"$0.next\"\n"
+          "#!/bin/sh\n[ \"$1\" = --parsable ] || exit 9\nn=$(cat \"$0.next\" 2>/dev/null || echo 100)\n"
+          "if [ -e \"$0.refuse\" ] || { [ -e \"$0.refuse_from\" ] && [ \"$n\" -ge \"$(cat \"$0.refuse_from\")\" ]; }; "
+          "then\n"
+          "  echo 'sbatch: error: Invalid account' >&2; exit 1\nfi\necho $((n + 1)) > \"$0.next\"\n"
           "echo \"$2\" >> \"$0.scripts\"\necho \"$n\"\n",
           true);
     write(bin_ / "squeue", "#!/bin/sh\necho \"$@\" >> \"$0.args\"\ncat \"$0.answer\" 2>/dev/null\nexit 0\n", true);
     write(bin_ / "sacct",
           "#!/bin/sh\nif [ -e \"$0.answer\" ]; then cat \"$0.answer\"; exit 0; fi\n"
           "echo 'sacct: error: Slurm accounting storage is disabled' >&2\nexit 1\n",
+          true);
+    write(bin_ / "scontrol",
+          "#!/bin/sh\n[ \"$1 $2\" = \"show config\" ] || exit 9\n"
+          "echo \"MaxArraySize            = $(cat \"$0.max\" 2>/dev/null || echo 1001)\"\n",
           true);
     setenv("PATH", (bin_.string() + ":" + path_).c_str(), 1);
   }
@@ -68,6 +74,8 @@ class FakeSlurm {
   void answer(const std::string& program, const std::string& text) const { write(bin_ / (program + ".answer"), text); }
   /// The arguments squeue was called with, a line per call.
   std::string queue_questions() const { return read(bin_ / "squeue.args"); }
+  void max_array_size(int size) const { write(bin_ / "scontrol.max", std::to_string(size)); }
+  void refuse_from(std::int64_t job) const { write(bin_ / "sbatch.refuse_from", std::to_string(job)); }
   void refuse(bool on) const {
     if (on) {
       write(bin_ / "sbatch.refuse", "");
@@ -128,19 +136,21 @@ TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bi
       {"study", "submit", file.string(), "--slurm", "--db", db.string(), "--max-parallel", "2", "--time", "5"}, dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
-  CHECK(contains(r.out, "study 1 'four': 4 points submitted as job 100 (array 1-4)"));
+  CHECK(contains(r.out,
+                 "study 1 'four': 4 points submitted as 1 job array\n  job 100 (array 0-3: points 1-4), script "
+                 "submit-1.sh\n"));
   REQUIRE(slurm.scripts().size() == 1);
   const auto script = slurm.scripts()[0];
   CHECK(script == dir / "runs.sqlite.shards/study-1/submit-1.sh");
-  CHECK(array_line(script) == "#SBATCH --array=1-4%2");
+  CHECK(array_line(script) == "#SBATCH --array=0-3%2");
   CHECK(count_rows(db, "SELECT count(*) FROM study_tasks WHERE job_id = 100 AND collected_at IS NULL") == 4);
   CHECK(count_rows(db, "SELECT count(*) FROM runs") == 0);
 
-  for (const int task : {1, 2, 4}) run_task(script, 100, task, dir);
-  // Task 3 killed as it starts: its shard stays unfinished.
-  const auto part = dir / "runs.sqlite.shards/study-1/task-3.job-100.sqlite.part";
+  for (const int task : {0, 1, 3}) run_task(script, 100, task, dir);
+  // Task 2 (point 3) killed as it starts: its shard stays unfinished.
+  const auto part = dir / "runs.sqlite.shards/study-1/task-2.job-100.sqlite.part";
   {
-    Process task = start_task(script, 100, 3, dir);
+    Process task = start_task(script, 100, 2, dir);
     for (int i = 0; i < 2000 && !std::filesystem::exists(part); ++i) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
@@ -154,7 +164,7 @@ TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bi
   CHECK(r.code == 0);
   CHECK(contains(r.out, "study 1 'four': 0 of 4 points completed, 1 jobs submitted"));
   CHECK(contains(r.out, "shard waiting"));
-  CHECK(contains(r.out, "task 3 of job 100 left an unfinished shard: it was killed while running"));
+  CHECK(contains(r.out, "task 2 of job 100 left an unfinished shard: it was killed while running"));
   CHECK(contains(r.out,
                  "sacct: error: Slurm accounting storage is disabled; tasks that left the queue are known "
                  "from their shards only"));
@@ -162,12 +172,13 @@ TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bi
   r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
   INFO(r.out);
   CHECK(r.code == 0);
-  CHECK(contains(r.out, "collected task 1 of job 100 (point 1, "));
+  CHECK(contains(r.out, "collected task 0 of job 100 (point 1, "));
+  CHECK(contains(r.out, "collected task 3 of job 100 (point 4, "));
   CHECK(contains(r.out, "): completed, 2 runs, 1 beds added, 0 shared"));
   CHECK(contains(r.out, "): completed, 2 runs, 0 beds added, 1 shared"));
   CHECK(
-      contains(r.out, "pdamp: point 3: task 3 of job 100 left an unfinished shard: it was killed while running (log: " +
-                          (dir / "runs.sqlite.shards/study-1/logs/100_3.log").string() + ")"));
+      contains(r.out, "pdamp: point 3: task 2 of job 100 left an unfinished shard: it was killed while running (log: " +
+                          (dir / "runs.sqlite.shards/study-1/logs/100_2.log").string() + ")"));
   CHECK(contains(r.out, "study 1 'four': 3 of 4 points completed; 3 shards collected now, 0 before"));
   r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
   CHECK(contains(r.out, "3 of 4 points completed; 0 shards collected now, 3 before"));
@@ -176,10 +187,10 @@ TEST_CASE("a study on Slurm, one task killed and resubmitted, collects to the bi
   r = pdamp_cli({"study", "submit", "--resume", "1", "--slurm", "--db", db.string()}, dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
-  CHECK(contains(r.out, "1 points submitted as job 101 (array 3)"));
+  CHECK(contains(r.out, "1 points submitted as 1 job array\n  job 101 (array 0-0: points 3)"));
   REQUIRE(slurm.scripts().size() == 2);
-  CHECK(array_line(slurm.scripts()[1]) == "#SBATCH --array=3");
-  run_task(slurm.scripts()[1], 101, 3, dir);
+  CHECK(array_line(slurm.scripts()[1]) == "#SBATCH --array=0-0");
+  run_task(slurm.scripts()[1], 101, 0, dir);
   r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
   CHECK(r.code == 0);
   CHECK(contains(r.out, "study 1 'four': 4 of 4 points completed; 1 shards collected now, 3 before"));
@@ -226,54 +237,54 @@ TEST_CASE("status and --resume follow squeue and sacct, and collect reports the 
   const auto script = slurm.scripts().at(0);
 
   // Queued and running tasks: status shows squeue's states, and nothing is submitted again.
-  slurm.answer("squeue", "100|1|RUNNING\n100|[2-4]|PENDING\n");
+  slurm.answer("squeue", "100|0|RUNNING\n100|[1-3]|PENDING\n");
   Result r = pdamp_cli(status, dir);
   INFO(r.out << r.err);
   CHECK(r.code == 0);
   CHECK(contains(slurm.queue_questions(), "--name=pdamp-study-1 --format=%F|%K|%T"));
   CHECK(contains(r.out, "study 1 'failing': 0 of 4 points completed, 1 jobs submitted"));
-  CHECK(contains(r.out, "task 1 of job 100 is RUNNING"));
-  CHECK(contains(r.out, "task 4 of job 100 is PENDING"));
+  CHECK(contains(r.out, "task 0 of job 100 is RUNNING"));
+  CHECK(contains(r.out, "task 3 of job 100 is PENDING"));
   r = pdamp_cli(resume, dir);
   CHECK(r.code == 0);
   CHECK(contains(r.err, "study 1 has no point to submit: every point is completed or queued"));
   CHECK(slurm.scripts().size() == 1);
 
-  // Tasks 1 to 3 ran (1 and 2 failing, exit 1), task 4 was cancelled before it started; the
-  // queue has forgotten them, accounting has not.
-  for (const int task : {1, 2, 3}) {
+  // Tasks 0 to 2 ran points 1 to 3 (1 and 2 failing, exit 1), task 3 was cancelled before it
+  // started; the queue has forgotten them, accounting has not.
+  for (const int task : {0, 1, 2}) {
     Process p = start_task(script, 100, task, dir);
-    CHECK(p.wait() == (task == 3 ? 0 : 1));
+    CHECK(p.wait() == (task == 2 ? 0 : 1));
   }
   slurm.answer("squeue", "");
-  slurm.answer("sacct", "100_1|FAILED\n100_2|FAILED\n100_3|COMPLETED\n100_4|CANCELLED by 0\n");
+  slurm.answer("sacct", "100_0|FAILED\n100_1|FAILED\n100_2|COMPLETED\n100_3|CANCELLED by 0\n");
   r = pdamp_cli(collect, dir);
   CHECK(r.code == 0);
-  CHECK(contains(r.out, "collected task 1 of job 100 (point 1, "));
+  CHECK(contains(r.out, "collected task 0 of job 100 (point 1, "));
   CHECK(contains(r.out, "): failed, 1 runs, 1 beds added, 0 shared"));
-  for (const char* point : {"pdamp: point 1: failed in task 1 of job 100: run ", "pdamp: point 2: failed in task 2"}) {
+  for (const char* point : {"pdamp: point 1: failed in task 0 of job 100: run ", "pdamp: point 2: failed in task 1"}) {
     CAPTURE(point);
     CHECK(contains(r.out, point));
   }
   CHECK(contains(r.out, "run.max_events = 100 events"));
   CHECK(contains(r.out,
-                 "pdamp: point 4: task 4 of job 100 left no shard: it never ran, or died before it could "
+                 "pdamp: point 4: task 3 of job 100 left no shard: it never ran, or died before it could "
                  "write one (log: " +
-                     (dir / "runs.sqlite.shards/study-1/logs/100_4.log").string() + ")"));
+                     (dir / "runs.sqlite.shards/study-1/logs/100_3.log").string() + ")"));
   CHECK(contains(r.out, "study 1 'failing': 1 of 4 points completed; 3 shards collected now, 0 before"));
   CHECK(count_rows(db, "SELECT count(*) FROM study_tasks WHERE outcome = 'failed' AND collected_at IS NOT NULL") == 2);
 
   r = pdamp_cli(status, dir);
   CHECK(contains(r.out, "COMPLETED"));
-  CHECK(contains(r.out, "task 4 of job 100 left no shard (Slurm: CANCELLED)"));
+  CHECK(contains(r.out, "task 3 of job 100 left no shard (Slurm: CANCELLED)"));
   CHECK(!contains(r.out, "accounting storage is disabled"));
 
   // The failed and the missing points are submitted again, not the completed one.
   r = pdamp_cli(resume, dir);
   CHECK(r.code == 0);
-  CHECK(contains(r.out, "3 points submitted as job 101 (array 1-2,4)"));
+  CHECK(contains(r.out, "3 points submitted as 1 job array\n  job 101 (array 0-2: points 1-2,4)"));
   REQUIRE(slurm.scripts().size() == 2);
-  CHECK(array_line(slurm.scripts()[1]) == "#SBATCH --array=1-2,4");
+  CHECK(array_line(slurm.scripts()[1]) == "#SBATCH --array=0-2");
 }
 
 TEST_CASE("submit checks everything before it writes: exit 2 with the reason, and a dry run writes nothing") {
@@ -322,9 +333,10 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
   Result r =
       pdamp_cli({"study", "submit", study, "--slurm", "--dry-run", "--db", db.string(), "--account", "lab"}, dir);
   CHECK(r.code == 0);
-  CHECK(contains(r.out, "#SBATCH --array=1-4\n#SBATCH --ntasks=1\n"));
+  CHECK(contains(r.out, "#SBATCH --array=0-3\n#SBATCH --ntasks=1\n"));
+  CHECK(contains(r.out, "--points 1-4 "));
   CHECK(contains(r.out, "#SBATCH --account=lab\n"));
-  CHECK(contains(r.err, "dry run: the job script for 4 points of study 1; nothing was written or submitted"));
+  CHECK(contains(r.err, "dry run: 1 job script for 4 points of study 1; nothing was written or submitted"));
   CHECK(!std::filesystem::exists(db));
   CHECK(!std::filesystem::exists(dir / "runs.sqlite.shards"));
   CHECK(slurm.scripts().empty());
@@ -345,7 +357,7 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
   const std::string stored = read(db);
   r = pdamp_cli({"study", "submit", "--resume", "1", "--slurm", "--dry-run", "--db", db.string()}, dir);
   CHECK(r.code == 0);
-  CHECK(contains(r.out, "#SBATCH --array=1-4\n"));
+  CHECK(contains(r.out, "#SBATCH --array=0-3\n"));
   CHECK(slurm.scripts().size() == 1);
   CHECK(read(db) == stored);
   CHECK(!std::filesystem::exists(dir / "runs.sqlite.shards/study-1/submit-2.sh"));
@@ -359,4 +371,47 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
   CHECK(r.code == 1);
   CHECK(contains(r.err, "sbatch is not installed here"));
   CHECK(!std::filesystem::exists(other));
+}
+
+TEST_CASE(
+    "a study larger than the cluster's MaxArraySize goes as several job arrays, each recorded as it is submitted") {
+  TempDir dir("slurm-arrays");
+  FakeSlurm slurm(dir);
+  slurm.max_array_size(3);
+  const auto file = four_points(dir);
+  const auto db = dir / "runs.sqlite";
+  Result r = pdamp_cli({"study", "submit", file.string(), "--slurm", "--dry-run", "--db", db.string()}, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "#SBATCH --array=0-2\n"));
+  CHECK(contains(r.out, "--points 1-3 "));
+  CHECK(contains(r.out, "#SBATCH --array=0-0\n"));
+  CHECK(contains(r.out, "--points 4 "));
+  CHECK(contains(r.err, "dry run: 2 job scripts for 4 points of study 1"));
+
+  // sbatch refuses the second array: the first stays recorded, and the user is told.
+  slurm.refuse_from(101);
+  r = pdamp_cli({"study", "submit", file.string(), "--slurm", "--db", db.string()}, dir);
+  INFO(r.out << r.err);
+  CHECK(r.code == 1);
+  CHECK(contains(r.err,
+                 "Invalid account; 3 of 4 points were submitted and recorded before (job 100 (array 0-2: points "
+                 "1-3), script submit-1.sh); 'pdamp study submit --resume 1 --slurm' submits the rest"));
+  CHECK(count_rows(db, "SELECT count(*) FROM study_tasks WHERE job_id = 100 AND task + 1 = point") == 3);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_tasks") == 3);
+  CHECK(!std::filesystem::exists(dir / "runs.sqlite.shards/study-1/submit-2.sh"));
+
+  std::filesystem::remove(dir / "bin/sbatch.refuse_from");
+  slurm.answer("squeue", "100|[0-2]|PENDING\n");
+  r = pdamp_cli({"study", "submit", "--resume", "1", "--slurm", "--db", db.string()}, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "1 points submitted as 1 job array\n  job 101 (array 0-0: points 4), script submit-2.sh"));
+  const auto scripts = slurm.scripts();
+  REQUIRE(scripts.size() == 2);
+  for (const int task : {0, 1, 2}) run_task(scripts[0], 100, task, dir);
+  run_task(scripts[1], 101, 0, dir);
+  slurm.answer("squeue", "");
+  r = pdamp_cli({"study", "collect", "1", "--db", db.string()}, dir);
+  CHECK(r.code == 0);
+  CHECK(contains(r.out, "collected task 0 of job 101 (point 4, "));
+  CHECK(contains(r.out, "study 1 'four': 4 of 4 points completed; 4 shards collected now, 0 before"));
 }

@@ -111,6 +111,8 @@ JobCompLoc=$folder/log/jobcomp.txt
 # A restarted slurmd rejoins on its own; cancelled tasks get 5 s between SIGTERM and SIGKILL.
 ReturnToService=2
 KillWait=5
+# Small, so that tools/slurm-study-test.sh's 8 points go as two job arrays (Slurm's default: 1001).
+MaxArraySize=5
 MailProg=/bin/true
 NodeName=$node NodeAddr=127.0.0.1 CPUs=$(nproc) RealMemory=$memory_mib State=UNKNOWN
 PartitionName=pdamp Nodes=$node Default=YES MaxTime=INFINITE State=UP

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Integration test of studies on Slurm (issue 26) on a real single-node Slurm
-# (tools/slurm-local.sh): submits an 8-point study of data/scenarios/small.ini (both models
-# from one bed per point) as a job array of at most 2 tasks at once, cancels one task mid-run
+# (tools/slurm-local.sh, MaxArraySize 5): submits an 8-point study of data/scenarios/small.ini
+# (both models from one bed per point) as two job arrays (points 1-5 and 6-8) of at most 2
+# tasks at once each, cancels one task mid-run
 # (scancel: SIGTERM, the task stores its point as interrupted) and kills another (SIGKILL to
 # its processes, as a node that fails would: its shard is left unfinished), collects, resubmits the two points with
 # --resume, collects again, and checks the store bit for bit against the same study run
@@ -22,7 +23,9 @@ local_slurm=$repo/tools/slurm-local.sh
 pdamp=${PDAMP:-$repo/build/ci/src/pdamp}
 queue_timeout_s=300
 cancelled_point=2 # long points (run.duration_s = 1.2): SIGTERM mid-run
+cancelled_task=1  # its index in the first array, which runs points 1 to 5
 killed_point=4    # SIGKILL mid-run
+killed_task=3
 own_cluster=1     # 0: a local Slurm started before, left running
 jobs=()           # the jobs submitted, cancelled if the test fails on a cluster it leaves running
 
@@ -95,9 +98,9 @@ expect_output() {
   grep -qF -- "$1" "$work/last.out" || fail "expected '$1' in the output above"
 }
 
-# The job id in submit's output: "... submitted as job J (array ...)".
-submitted_job() {
-  sed -n 's/.* submitted as job \([0-9]*\) (array.*/\1/p' "$work/last.out"
+# The job ids in submit's output, a line each: "  job J (array 0-N: points ...), script ...".
+submitted_jobs() {
+  sed -n 's/^  job \([0-9]*\) (array .*/\1/p' "$work/last.out"
 }
 
 job_done() {
@@ -158,20 +161,25 @@ compare_stores() {
 }
 
 submit_and_cancel() {
-  local job
+  local job submitted
   run_pdamp study submit "$work/study.ini" --slurm --max-parallel 2 --time 10 || fail "study submit failed"
-  expect_output "8 points submitted as job"
-  job=$(submitted_job)
-  jobs+=("$job")
-  grep -qx "#SBATCH --array=1-8%2" "$work/runs.sqlite.shards/study-1/submit-1.sh" || fail "the job script's array is not 1-8%2"
-  wait_for "task $cancelled_point of job $job to compute" "$queue_timeout_s" task_computing "$job" "$cancelled_point"
-  scancel "${job}_$cancelled_point"
-  say "cancelled task $cancelled_point of job $job mid-run"
-  wait_for "task $killed_point of job $job to compute" "$queue_timeout_s" task_computing "$job" "$killed_point"
-  kill_task "$job" "$killed_point"
-  say "killed task $killed_point of job $job mid-run"
-  wait_for "job $job to end" "$queue_timeout_s" job_done "$job"
-  first_job=$job
+  expect_output "8 points submitted as 2 job arrays"
+  mapfile -t submitted < <(submitted_jobs)
+  ((${#submitted[@]} == 2)) || fail "expected two job ids in submit's output"
+  jobs+=("${submitted[@]}")
+  job=${submitted[0]}
+  expect_output "job $job (array 0-4: points 1-5)"
+  expect_output "job ${submitted[1]} (array 0-2: points 6-8)"
+  grep -qx "#SBATCH --array=0-4%2" "$work/runs.sqlite.shards/study-1/submit-1.sh" || fail "the first job script's array is not 0-4%2"
+  grep -qx "#SBATCH --array=0-2%2" "$work/runs.sqlite.shards/study-1/submit-2.sh" || fail "the second job script's array is not 0-2%2"
+  wait_for "task $cancelled_task of job $job to compute" "$queue_timeout_s" task_computing "$job" "$cancelled_task"
+  scancel "${job}_$cancelled_task"
+  say "cancelled task $cancelled_task of job $job (point $cancelled_point) mid-run"
+  wait_for "task $killed_task of job $job to compute" "$queue_timeout_s" task_computing "$job" "$killed_task"
+  kill_task "$job" "$killed_task"
+  say "killed task $killed_task of job $job (point $killed_point) mid-run"
+  for job in "${submitted[@]}"; do wait_for "job $job to end" "$queue_timeout_s" job_done "$job"; done
+  first_job=${submitted[0]}
 }
 
 # SIGKILL to the processes of task $2 of job $1, which Slurm lists by the task's own job id.
@@ -189,17 +197,17 @@ kill_task() {
 collect_and_resume() {
   local job
   run_pdamp study status 1 || fail "study status failed"
-  expect_output "task $killed_point of job $first_job left an unfinished shard"
+  expect_output "task $killed_task of job $first_job left an unfinished shard"
   run_pdamp study collect 1 || fail "study collect failed"
   expect_output "6 of 8 points completed;"
-  expect_output "collected task $cancelled_point of job $first_job (point $cancelled_point, "
-  expect_output "pdamp: point $cancelled_point: interrupted in task $cancelled_point of job $first_job: run "
-  expect_output "pdamp: point $killed_point: task $killed_point of job $first_job left an unfinished shard: it was killed while running"
+  expect_output "collected task $cancelled_task of job $first_job (point $cancelled_point, "
+  expect_output "pdamp: point $cancelled_point: interrupted in task $cancelled_task of job $first_job: run "
+  expect_output "pdamp: point $killed_point: task $killed_task of job $first_job left an unfinished shard: it was killed while running"
   run_pdamp study submit --resume 1 --slurm --time 10 || fail "study submit --resume failed"
-  expect_output "2 points submitted as job"
-  job=$(submitted_job)
+  expect_output "2 points submitted as 1 job array"
+  job=$(submitted_jobs)
   jobs+=("$job")
-  expect_output "(array $cancelled_point,$killed_point)"
+  expect_output "job $job (array 0-1: points $cancelled_point,$killed_point)"
   wait_for "job $job to end" "$queue_timeout_s" job_done "$job"
   run_pdamp study collect 1 || fail "the second study collect failed"
   expect_output "8 of 8 points completed"

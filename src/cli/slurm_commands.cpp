@@ -172,16 +172,53 @@ std::pair<std::int64_t, std::vector<std::int64_t>> planned(const std::string& db
   return {stored, points_to_submit(cluster.open.studies, stored, cluster.tasks(false))};
 }
 
+/// Slurm's limit on a job array, with a note on stderr where it was assumed.
+std::int64_t max_array_size() {
+  const ArrayLimit limit = array_limit();
+  if (!limit.problem.empty()) std::cerr << "pdamp: " << printable(limit.problem) << "\n";
+  return limit.max_array_size;
+}
+
+/// "job 100 (array 0-4: points 1-5)".
+std::string job_line(std::int64_t job, const std::vector<std::int64_t>& points) {
+  return "job " + std::to_string(job) + " (array 0-" + std::to_string(points.size() - 1) + ": points " +
+         array_ranges(points) + ")";
+}
+
 int dry_run(const std::string& db, const study::Study& study, const SlurmOptions& options) {
   const auto [id, points] = planned(db, study);
   if (points.empty()) {
     std::cerr << "pdamp: dry run: study " << id << " has no point to submit\n";
     return 0;
   }
-  std::cout << job_script({id, study.file.name, this_executable(), ShardFolder(db, id), points, options});
-  std::cerr << "pdamp: dry run: the job script for " << points.size() << " points of study " << id
-            << "; nothing was written or submitted\n";
+  const auto arrays = array_chunks(points, max_array_size());
+  for (const auto& chunk : arrays) {
+    std::cout << job_script({id, study.file.name, this_executable(), ShardFolder(db, id), chunk, options});
+  }
+  std::cerr << "pdamp: dry run: " << arrays.size() << " job script" << (arrays.size() == 1 ? "" : "s") << " for "
+            << points.size() << " points of study " << id << "; nothing was written or submitted\n";
   return 0;
+}
+
+/// Submits one job array for `points` and records it with the point of each task; returns
+/// the job's line for the user.
+std::string submit_array(OpenStudy& open, const ShardFolder& folder, const std::vector<std::int64_t>& points,
+                         const SlurmOptions& options) {
+  const auto script =
+      new_script(folder, job_script({open.id, open.record.name, this_executable(), folder, points, options}));
+  std::int64_t job = 0;
+  try {
+    job = submit(script);
+  } catch (...) {
+    std::filesystem::remove(script);
+    throw;
+  }
+  std::vector<std::pair<std::int64_t, int>> tasks_of_job;
+  for (std::size_t task = 0; task < points.size(); ++task) {
+    tasks_of_job.emplace_back(static_cast<std::int64_t>(task), static_cast<int>(points[task]));
+  }
+  open.studies.record_job(open.id, {job, "", script.string(), folder.path().string()}, tasks_of_job);
+  return job_line(job, points) + ", script " + printable(script.filename().string());
 }
 
 int submit_points(ClusterStudy& cluster, const SlurmOptions& options) {
@@ -204,25 +241,31 @@ int submit_points(ClusterStudy& cluster, const SlurmOptions& options) {
               << "study status " << open.id << "')\n";
     return 0;
   }
+  // More points than one array may hold go as several arrays, each recorded as it is
+  // submitted: a refusal part way leaves the arrays before it recorded, and says so.
+  const auto arrays = array_chunks(points, max_array_size());
   const ShardFolder folder = cluster.folder();
   std::filesystem::create_directories(folder.logs());
   write_folder_study(folder, open.record);
-  const auto script =
-      new_script(folder, job_script({open.id, open.record.name, this_executable(), folder, points, options}));
-  std::int64_t job = 0;
-  try {
-    job = submit(script);
-  } catch (...) {
-    std::filesystem::remove(script);
-    throw;
+  std::vector<std::string> submitted;
+  std::size_t n_submitted = 0;
+  for (const auto& chunk : arrays) {
+    try {
+      submitted.push_back(submit_array(open, folder, chunk, options));
+      n_submitted += chunk.size();
+    } catch (const RuntimeFailure& e) {
+      if (submitted.empty()) throw;
+      std::string done;
+      for (const auto& line : submitted) done += (done.empty() ? "" : ", ") + line;
+      throw RuntimeFailure(std::string(e.what()) + "; " + std::to_string(n_submitted) + " of " +
+                           std::to_string(points.size()) + " points were submitted and recorded before (" + done +
+                           "); 'pdamp study submit --resume " + std::to_string(open.id) + " --slurm' submits the rest");
+    }
   }
-  std::vector<std::pair<std::int64_t, int>> tasks_of_job;
-  for (const auto point : points) tasks_of_job.emplace_back(point, static_cast<int>(point));
-  open.studies.record_job(open.id, {job, "", script.string(), folder.path().string()}, tasks_of_job);
   std::cout << "study " << open.id << " '" << printable(open.record.name) << "': " << points.size()
-            << " points submitted as job " << job << " (array " << array_ranges(points) << ")\n"
-            << "  job script     " << printable(script.string()) << "\n"
-            << "  shard stores   " << printable(folder.path().string()) << "\n"
+            << " points submitted as " << arrays.size() << " job array" << (arrays.size() == 1 ? "" : "s") << "\n";
+  for (const auto& line : submitted) std::cout << "  " << line << "\n";
+  std::cout << "  shard folder   " << printable(folder.path().string()) << "\n"
             << "then: pdamp study status " << open.id << ", pdamp study collect " << open.id << "\n";
   return 0;
 }
@@ -344,9 +387,10 @@ int study_status(const std::vector<std::string>& args) {
 }
 
 int study_task(const std::vector<std::string>& args) {
-  Subcommand command("pdamp study task SHARD_FOLDER --job J --task T [options]", {"SHARD_FOLDER"});
+  Subcommand command("pdamp study task SHARD_FOLDER --job J --task T --points LIST [options]", {"SHARD_FOLDER"});
   command.add_options()("job", po::value<std::string>(), "the job array's id (SLURM_ARRAY_JOB_ID)")(
-      "task", po::value<std::string>(), "the task's index in it (SLURM_ARRAY_TASK_ID): the point it runs")(
+      "task", po::value<std::string>(), "the task's index in it (SLURM_ARRAY_TASK_ID), from 0")(
+      "points", po::value<std::string>(), "the array's points, rising, e.g. 1-3,5: task T runs the T-th, from 0")(
       "threads", po::value<std::string>(), "soft-engine threads")(
       "scratch", po::value<std::string>(), "a folder to write the shard in first (node-local scratch)");
   if (!command.parse(args)) return 0;
@@ -354,19 +398,21 @@ int study_task(const std::vector<std::string>& args) {
   constexpr long largest = std::numeric_limits<std::int64_t>::max();
   ShardTaskRequest request{ShardFolder(std::filesystem::path(required_option(vm, "SHARD_FOLDER", "study task"))),
                            parse_whole_number(required_option(vm, "job", "study task"), 1, largest, "--job"),
-                           parse_whole_number(required_option(vm, "task", "study task"), 0, largest, "--task"),
+                           parse_whole_number(required_option(vm, "task", "study task"), 0, largest, "--task"), 0,
                            vm.count("scratch") ? vm["scratch"].as<std::string>() : std::string()};
+  request.point =
+      nth_in_ranges(required_option(vm, "points", "study task"), request.task, std::numeric_limits<int>::max());
   if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
   install_stop_handlers();
   study::PointRunControl control;
   control.stop = stop_flag();
   control.warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
-  control.progress = progress_lines(static_cast<int>(request.task));
-  std::cout << "pdamp: task " << request.task << " of job " << request.job << " on "
+  std::cout << "pdamp: task " << request.task << " of job " << request.job << " (point " << request.point << ") on "
             << printable(study::this_process_lease().host) << ", shard folder "
             << printable(request.folder.path().string()) << std::endl;
+  control.progress = progress_lines(static_cast<int>(request.point));
   const ShardTaskResult result = run_shard_task(request, control);
-  std::cout << "pdamp: point " << request.task << " of study " << result.study_id << " "
+  std::cout << "pdamp: point " << request.point << " of study " << result.study_id << " "
             << to_string(result.point.status) << (result.point.message.empty() ? "" : ": " + result.point.message)
             << "; shard " << printable(result.shard.string()) << std::endl;
   switch (result.point.status) {

@@ -35,6 +35,13 @@ std::string checked(const std::string& text, const std::string& what, const std:
   return text;
 }
 
+/// The numbers sorted, each once: the order of a job array's points.
+std::vector<std::int64_t> rising(std::vector<std::int64_t> numbers) {
+  std::sort(numbers.begin(), numbers.end());
+  numbers.erase(std::unique(numbers.begin(), numbers.end()), numbers.end());
+  return numbers;
+}
+
 }  // namespace
 
 ShardFolder::ShardFolder(const std::filesystem::path& store, std::int64_t study_id)
@@ -130,33 +137,73 @@ std::string parse_scratch(const std::string& text) {
                  "and $NAME or ${NAME} for the task's environment variables)");
 }
 
-std::string array_ranges(std::vector<std::int64_t> indices) {
-  std::sort(indices.begin(), indices.end());
-  indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
+std::string array_ranges(std::vector<std::int64_t> numbers) {
+  numbers = rising(std::move(numbers));
   std::string text;
-  for (std::size_t i = 0; i < indices.size();) {
+  for (std::size_t i = 0; i < numbers.size();) {
     std::size_t j = i;
-    while (j + 1 < indices.size() && indices[j + 1] == indices[j] + 1) ++j;
+    while (j + 1 < numbers.size() && numbers[j + 1] == numbers[j] + 1) ++j;
     if (!text.empty()) text += ',';
-    text += std::to_string(indices[i]);
-    if (j > i) text.append("-").append(std::to_string(indices[j]));
+    text += std::to_string(numbers[i]);
+    if (j > i) text.append("-").append(std::to_string(numbers[j]));
     i = j + 1;
   }
   return text;
 }
 
+std::int64_t nth_in_ranges(std::string_view ranges, std::int64_t index, std::int64_t largest) {
+  const auto refuse = [&](const std::string& why) -> std::int64_t {
+    throw InputError("the list of points '" + std::string(ranges.substr(0, 200)) + "': " + why);
+  };
+  if (ranges.empty()) return refuse("no point");
+  if (index < 0) return refuse("no task " + std::to_string(index) + " (tasks run from 0)");
+  std::int64_t count = 0, previous = 0;
+  std::optional<std::int64_t> found;  // the whole list is checked, also past the task's point
+  for (std::string_view rest = ranges;;) {
+    const auto comma = rest.find(',');
+    const std::string_view part = rest.substr(0, comma);
+    const auto dash = part.find('-');
+    const auto first = whole_number(part.substr(0, dash));
+    const auto last = dash == std::string_view::npos ? first : whole_number(part.substr(dash + 1));
+    if (!first || !last || *first < 1 || *last < *first || *last > largest) {
+      return refuse("'" + std::string(part.substr(0, 40)) + "' is not a point or a range FIRST-LAST of points 1 to " +
+                    std::to_string(largest));
+    }
+    if (*first <= previous) return refuse("the points must rise");
+    if (!found && index < count + (*last - *first + 1)) found = *first + (index - count);
+    count += *last - *first + 1;
+    previous = *last;
+    if (comma == std::string_view::npos) break;
+    rest = rest.substr(comma + 1);
+  }
+  if (found) return *found;
+  return refuse("it has " + std::to_string(count) + " points, so no task " + std::to_string(index) +
+                " (tasks run from 0)");
+}
+
+std::vector<std::vector<std::int64_t>> array_chunks(std::vector<std::int64_t> points, std::int64_t max_array_size) {
+  points = rising(std::move(points));
+  std::vector<std::vector<std::int64_t>> chunks;
+  for (std::size_t i = 0; i < points.size(); i += static_cast<std::size_t>(max_array_size)) {
+    const auto end = std::min(points.size(), i + static_cast<std::size_t>(max_array_size));
+    chunks.emplace_back(points.begin() + static_cast<std::ptrdiff_t>(i),
+                        points.begin() + static_cast<std::ptrdiff_t>(end));
+  }
+  return chunks;
+}
+
 std::string job_script(const JobScriptRequest& r) {
   const SlurmOptions& o = r.options;
   std::ostringstream s;
+  const std::size_t n_points = rising(r.points).size();
   s << "#!/bin/bash\n"
-    << "# pdamp study " << r.study_id << ": " << r.tasks.size()
-    << " points as a job array, one task per point (task T runs point T).\n"
+    << "# pdamp study " << r.study_id << ": " << n_points
+    << " points as a job array, one task per point (task T runs the T-th of --points, from 0).\n"
     << "# Written by 'pdamp study submit' (pdamp " << version_string << "), which records the job in the\n"
     << "# study's store. Each task writes its own shard store in " << checked_script_path(r.folder.path()) << ";\n"
     << "# 'pdamp study collect " << r.study_id << "' merges them into the store.\n"
     << "#SBATCH --job-name=pdamp-study-" << r.study_id << "\n"
-    << "#SBATCH --array=" << array_ranges(r.tasks) << (o.max_parallel > 0 ? "%" + std::to_string(o.max_parallel) : "")
-    << "\n"
+    << "#SBATCH --array=0-" << n_points - 1 << (o.max_parallel > 0 ? "%" + std::to_string(o.max_parallel) : "") << "\n"
     << "#SBATCH --ntasks=1\n"
     << "#SBATCH --cpus-per-task=" << o.threads << "\n"
     << "#SBATCH --output=" << checked_script_path(r.folder.logs()) << "/%A_%a.log\n";
@@ -164,7 +211,8 @@ std::string job_script(const JobScriptRequest& r) {
   if (!o.account.empty()) s << "#SBATCH --account=" << o.account << "\n";
   if (!o.time_limit.empty()) s << "#SBATCH --time=" << o.time_limit << "\n";
   s << "exec " << shell_quoted(r.pdamp.string()) << " study task " << shell_quoted(r.folder.path().string())
-    << " --job \"$SLURM_ARRAY_JOB_ID\" --task \"$SLURM_ARRAY_TASK_ID\" --threads \"${SLURM_CPUS_PER_TASK:-1}\"";
+    << " --job \"$SLURM_ARRAY_JOB_ID\" --task \"$SLURM_ARRAY_TASK_ID\" --points " << array_ranges(r.points)
+    << " --threads \"${SLURM_CPUS_PER_TASK:-1}\"";
   if (!o.scratch.empty()) s << " --scratch \"" << o.scratch << "\"";
   s << "\n";
   return s.str();

@@ -43,7 +43,7 @@ study::PointResult run_in_shard(const std::filesystem::path& work, const study::
   options.single_process = true;
   RunStore store(work, StoreAccess::modify, options);
   StudyStore studies(store);
-  const study::StudyPoint& point = study.points.at(static_cast<std::size_t>(r.task - 1));
+  const study::StudyPoint& point = study.points.at(static_cast<std::size_t>(r.point - 1));
   studies.add_points(record.study_id, {{point.point, point.section, point.values}});
   StudyTask task = StudyTask::of(r.job, r.task, point.point);
   task.host = study::this_process_lease().host;
@@ -91,9 +91,9 @@ StudyRecord folder_study(const ShardFolder& folder) {
 ShardTaskResult run_shard_task(const ShardTaskRequest& r, const study::PointRunControl& control) {
   const StudyRecord record = folder_study(r.folder);
   const study::Study study = study::stored_study(record);
-  if (r.task < 1 || static_cast<std::size_t>(r.task) > study.points.size()) {
-    throw InputError("task " + std::to_string(r.task) + ": study " + std::to_string(record.study_id) +
-                     " has points 1 to " + std::to_string(study.points.size()));
+  if (r.point < 1 || static_cast<std::size_t>(r.point) > study.points.size()) {
+    throw InputError("task " + std::to_string(r.task) + ": point " + std::to_string(r.point) + ": study " +
+                     std::to_string(record.study_id) + " has points 1 to " + std::to_string(study.points.size()));
   }
   const auto final_file = r.folder.shard(r.job, r.task), part = r.folder.unfinished(r.job, r.task);
   const auto work = r.scratch.empty() ? part : r.scratch / ("pdamp-" + final_file.filename().string());

@@ -1,10 +1,12 @@
 #include "pdamp/slurm/slurm.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <sstream>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/slurm/job_script.hpp"
 #include "pdamp/slurm/program.hpp"
 
 namespace pdamp::slurm {
@@ -85,7 +87,11 @@ std::int64_t submit(const std::filesystem::path& script) {
     throw RuntimeFailure("sbatch is not installed here: submit from a machine of the Slurm cluster (a login node)");
   }
   const ProgramResult r = run_program({"sbatch", "--parsable", script.string()}, std::chrono::seconds(120));
-  if (r.exit_code != 0) throw RuntimeFailure("sbatch refused the job script " + script.string() + ": " + r.err);
+  if (r.exit_code != 0) {
+    std::string reason = r.err;
+    while (!reason.empty() && std::isspace(static_cast<unsigned char>(reason.back()))) reason.pop_back();
+    throw RuntimeFailure("sbatch refused the job script " + script.string() + ": " + reason);
+  }
   return parse_job_id(r.out);
 }
 
@@ -127,6 +133,42 @@ SlurmReport accounting_states(const std::vector<std::int64_t>& jobs) {
   const std::vector<std::string> argv{
       "sacct", "--noheader", "--parsable2", "--allocations", "--jobs=" + joined(jobs), "--format=JobID,State"};
   return ask(argv, parse_accounting, jobs);
+}
+
+std::optional<std::int64_t> parse_max_array_size(std::string_view config) {
+  std::istringstream lines{std::string(config)};
+  for (std::string line; std::getline(lines, line);) {
+    const auto equals = line.find('=');
+    if (equals == std::string::npos) continue;
+    std::string_view key = std::string_view(line).substr(0, equals), value = std::string_view(line).substr(equals + 1);
+    while (key.ends_with(' ')) key.remove_suffix(1);
+    while (value.starts_with(' ')) value.remove_prefix(1);
+    if (key == "MaxArraySize") return number(value);
+  }
+  return std::nullopt;
+}
+
+ArrayLimit array_limit() {
+  const auto assumed = [](const std::string& why) {
+    return ArrayLimit{default_max_array_size, why + ": job arrays of at most " +
+                                                  std::to_string(default_max_array_size) +
+                                                  " tasks assumed (Slurm's default MaxArraySize)"};
+  };
+  if (!find_program("scontrol")) return assumed("'scontrol' is not installed here");
+  ProgramResult r;
+  try {
+    r = run_program({"scontrol", "show", "config"}, std::chrono::seconds(60));
+  } catch (const RuntimeFailure& e) {
+    return assumed(e.what());
+  }
+  if (r.exit_code != 0) return assumed("scontrol show config: " + first_line(r.err));
+  const auto size = parse_max_array_size(r.out);
+  if (!size) return assumed("scontrol show config names no MaxArraySize");
+  if (*size < 1) {
+    throw RuntimeFailure("the cluster takes no job arrays (MaxArraySize = " + std::to_string(*size) +
+                         " in scontrol show config), and pdamp submits a study as one; nothing was submitted");
+  }
+  return {*size, ""};
 }
 
 bool in_flight(std::string_view state) {

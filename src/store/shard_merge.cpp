@@ -188,12 +188,19 @@ class Merger {
   void run() {
     const StudyTask& task = result_->task;
     sqlite::Statement collected(*store_,
-                                "SELECT collected_at IS NOT NULL FROM study_tasks "
+                                "SELECT collected_at IS NOT NULL, point FROM study_tasks "
                                 "WHERE study_id = ? AND job_id = ? AND task = ?");
     collected.bind(1, study_id_).bind(2, task.job_id).bind(3, task.task);
-    if (collected.step() && collected.column_int(0) != 0) {
-      result_->already_collected = true;
-      return;
+    if (collected.step()) {
+      if (collected.column_int(1) != task.point) {
+        throw InputError("shard " + quoted(shard_->file()) + " ran point " + std::to_string(task.point) + " as task " +
+                         std::to_string(task.task) + " of job " + std::to_string(task.job_id) +
+                         ", which was submitted to run point " + std::to_string(collected.column_int(1)));
+      }
+      if (collected.column_int(0) != 0) {
+        result_->already_collected = true;
+        return;
+      }
     }
     const auto ours = StudyStore(*store_).point(study_id_, task.point);
     const auto theirs = StudyStore(shard_->db()).point(study_id_, task.point);

@@ -15,7 +15,7 @@ namespace pdamp::slurm {
 ///   study.sqlite                  the study (no points), copied by each task into its shard
 ///   submit-K.sh                   the job scripts, one per submission
 ///   logs/JOB_TASK.log             each task's output (Slurm's %A_%a)
-///   task-T.job-J.sqlite           the shard store of task T (the point it runs) of job J
+///   task-T.job-J.sqlite           the shard store of task T of job J (the T-th point it runs)
 ///   task-T.job-J.sqlite.part      the same while it is written, or left by a killed task
 class ShardFolder {
  public:
@@ -65,20 +65,33 @@ std::string parse_scratch(const std::string& text);
 /// a path they cannot hold (white space, quotes, '\\', '%'), naming the character.
 std::string checked_script_path(const std::filesystem::path& path);
 
-/// Array indices as Slurm's --array list: "1-3,5,7-8".
-std::string array_ranges(std::vector<std::int64_t> indices);
+/// Numbers (array indices, points) as Slurm's --array list: "1-3,5,7-8", sorted, each once.
+std::string array_ranges(std::vector<std::int64_t> numbers);
+
+/// The `index`-th (from 0) number of a list array_ranges writes, found without expanding
+/// it. Throws InputError naming the text for anything array_ranges does not write (or a
+/// number above `largest`), and for an index beyond the list.
+std::int64_t nth_in_ranges(std::string_view ranges, std::int64_t index, std::int64_t largest);
+
+/// Slurm's default MaxArraySize: array indices 0 to 1000.
+inline constexpr std::int64_t default_max_array_size = 1001;
+
+/// Points sorted, each once, and split into job arrays of at most `max_array_size` tasks
+/// each (Slurm takes array indices 0 to MaxArraySize − 1).
+std::vector<std::vector<std::int64_t>> array_chunks(std::vector<std::int64_t> points, std::int64_t max_array_size);
 
 struct JobScriptRequest {
   std::int64_t study_id = 0;
   std::string study_name;
   std::filesystem::path pdamp;  ///< the executable the tasks run
   ShardFolder folder;
-  std::vector<std::int64_t> tasks;  ///< array indices: task T runs point T
+  std::vector<std::int64_t> points;  ///< task T of the array (from 0) runs the T-th of them, in rising order
   SlurmOptions options;
 };
 
-/// The job array's script: #SBATCH lines, then the task (`pdamp study task`). Throws
-/// InputError for a shard folder #SBATCH lines cannot hold (checked_script_path).
+/// The job array's script: #SBATCH lines, then the task (`pdamp study task`), which finds
+/// its point from its index in the list of points the script gives it. Throws InputError
+/// for a shard folder #SBATCH lines cannot hold (checked_script_path).
 std::string job_script(const JobScriptRequest& request);
 
 }  // namespace pdamp::slurm

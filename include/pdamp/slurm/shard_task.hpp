@@ -13,7 +13,8 @@ namespace pdamp::slurm {
 
 struct ShardTaskRequest {
   ShardFolder folder;
-  std::int64_t job = 0, task = 0;  ///< the job array and the task's index in it: the point it runs
+  std::int64_t job = 0, task = 0;  ///< the job array and the task's index in it
+  std::int64_t point = 0;          ///< the point the task runs
   std::filesystem::path scratch;   ///< a folder to write the shard in first; empty: the shard folder
 };
 
@@ -37,7 +38,7 @@ StudyRecord folder_study(const ShardFolder& folder);
 /// (study::run_study_point), records how the task ended, and renames the finished shard
 /// into place in the folder: a shard under its final name is whole. A stop request ends
 /// the point as interrupted, and the shard is still put in place. Throws InputError,
-/// writing nothing, for a folder without its study or a task that is not a point of it.
+/// writing nothing, for a folder without its study or a point the study does not have.
 ShardTaskResult run_shard_task(const ShardTaskRequest& request, const study::PointRunControl& control);
 
 }  // namespace pdamp::slurm

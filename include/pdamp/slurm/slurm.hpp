@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -40,6 +41,19 @@ SlurmReport accounting_states(const std::vector<std::int64_t>& jobs);
 /// each of its tasks.
 TaskStates parse_queue(std::string_view text, const std::vector<std::int64_t>& jobs);
 TaskStates parse_accounting(std::string_view text, const std::vector<std::int64_t>& jobs);
+
+/// The cluster's limit on a job array (MaxArraySize: indices 0 to it − 1).
+struct ArrayLimit {
+  std::int64_t max_array_size = 0;
+  std::string problem;  ///< why scontrol did not tell, and Slurm's default was assumed; empty if it did
+};
+/// MaxArraySize from `scontrol show config`; Slurm's default (1001) with the reason where
+/// scontrol is missing or does not answer. Throws RuntimeFailure if the cluster has job
+/// arrays turned off (MaxArraySize 0).
+ArrayLimit array_limit();
+/// The MaxArraySize line of `scontrol show config`'s answer ("MaxArraySize = 1001"), or
+/// nothing if it has none.
+std::optional<std::int64_t> parse_max_array_size(std::string_view config);
 
 /// Whether a state means the task may still run (queued, running, or being requeued).
 bool in_flight(std::string_view state);

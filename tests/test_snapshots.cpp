@@ -14,6 +14,7 @@
 #include "pdamp/sim/run.hpp"
 #include "pdamp/sim/snapshots.hpp"
 #include "pdamp/store/run_store.hpp"
+#include "study_compare.hpp"
 #include "test_process.hpp"
 #include "test_support.hpp"
 
@@ -235,6 +236,49 @@ TEST_CASE("pdamp compare --snapshots: VTK reads every frame of both runs, and th
     CHECK(shown.out.find("snapshots               11 frames every 0.01 s: " + collection.string()) !=
           std::string::npos);
   }
+}
+
+TEST_CASE("pdamp study run --snapshots: every run of every point has its frames, and the same bits as without") {
+  test::TempDir dir("snapshots-study");
+  const auto file = dir / "study.ini";
+  std::ofstream(file) << "[study]\nscenario = " << test::scenario_file("small").string()
+                      << "\nmodels = both\n[sweep]\nhost.damping_N_s_m = 0.1, 0.3\nrun.duration_s = 0.05\n";
+  const auto plain = dir / "plain.sqlite", shot = dir / "shot.sqlite";
+  Result r = run(PDAMP_EXECUTABLE, {"study", "run", file.string(), "--db", plain.string()}, dir, "plain");
+  REQUIRE(r.code == 0);
+  // Two workers, each writing where the study runner would have.
+  r = run(PDAMP_EXECUTABLE,
+          {"study", "run", file.string(), "--db", shot.string(), "--jobs", "2", "--snapshots", "0.01", "--snapshot-dir",
+           (dir / "frames").string()},
+          dir, "snapshots");
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto [differing, compared] = test::sample_differences(plain, shot);
+  CHECK(compared == 4 * 101);
+  CHECK(differing == 0);
+  CHECK(test::metric_differences(plain, shot) == 0);
+  CHECK(test::count_rows(shot, "SELECT count(*) FROM run_snapshots WHERE frames = 6") == 4);
+  for (const std::int64_t run_id : {1, 2, 3, 4}) {
+    const std::string run_name = "run-" + std::to_string(run_id);
+    const Result checked = check_with_vtk(dir / "frames" / run_name / (run_name + ".pvd"),
+                                          {"--db", shot.string(), "--run", std::to_string(run_id)}, dir);
+    INFO(checked.err);
+    CHECK(checked.code == 0);
+    CHECK(checked.out.find("6 frames") != std::string::npos);
+  }
+
+  // Checked for every point before anything is written.
+  const auto refused = dir / "refused.sqlite";
+  r = run(PDAMP_EXECUTABLE,
+          {"study", "run", file.string(), "--db", refused.string(), "--snapshots", "0.0002", "--snapshot-dir",
+           (dir / "other").string()},
+          dir, "refused");
+  CHECK(r.code == 2);
+  CHECK(r.err.find(": point 1 of 2 ([sweep] host.damping_N_s_m = 0.1, run.duration_s = 0.05): --snapshots 0.0002") !=
+        std::string::npos);
+  CHECK(r.err.find("give a whole multiple of it") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(refused));
+  CHECK_FALSE(std::filesystem::exists(dir / "other"));
 }
 
 TEST_CASE("bad snapshot options exit with code 2, name the value and write nothing") {

@@ -67,27 +67,6 @@ po::options_description duration_option() {
   return o;
 }
 
-po::options_description snapshot_options() {
-  po::options_description o("snapshots for ParaView (docs/snapshots.md)");
-  o.add_options()("snapshots", po::value<std::string>()->value_name("EVERY_S"),
-                  "write the spheres and the cavity as VTK files every EVERY_S s of simulated time, listed in one .pvd "
-                  "per run")("snapshot-dir", po::value<std::string>()->value_name("DIR"),
-                             "folder of the snapshots, each run's in DIR/run-<id>/ (default: beside the store, "
-                             "named after it: pdamp.snapshots for pdamp.sqlite)");
-  return o;
-}
-
-/// --snapshots and --snapshot-dir, if given (checked against the scenario by plan_run).
-std::optional<SnapshotSettings> snapshot_request(const po::variables_map& vm) {
-  if (!vm.count("snapshots")) {
-    if (vm.count("snapshot-dir")) throw InputError("--snapshot-dir needs --snapshots EVERY_S");
-    return std::nullopt;
-  }
-  return parse_snapshot_settings(vm["snapshots"].as<std::string>(),
-                                 vm.count("snapshot-dir") ? vm["snapshot-dir"].as<std::string>() : std::string(),
-                                 default_snapshot_directory(vm["db"].as<std::string>()));
-}
-
 /// The scenario file with --set and --duration, in the order given (the last of a key wins).
 ScenarioRequest scenario_request(const CommandLine& line, const std::string& command) {
   ScenarioRequest request{required_option(line.vm, "scenario", command), {}};

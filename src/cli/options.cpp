@@ -44,4 +44,24 @@ long parse_whole_number(const std::string& text, long min, long max, const std::
   return value;
 }
 
+po::options_description snapshot_options() {
+  po::options_description o("snapshots for ParaView (docs/snapshots.md)");
+  o.add_options()("snapshots", po::value<std::string>()->value_name("EVERY_S"),
+                  "write the spheres and the cavity as VTK files every EVERY_S s of simulated time, listed in one .pvd "
+                  "per run")("snapshot-dir", po::value<std::string>()->value_name("DIR"),
+                             "folder of the snapshots, each run's in DIR/run-<id>/ (default: beside the store, "
+                             "named after it: pdamp.snapshots for pdamp.sqlite)");
+  return o;
+}
+
+std::optional<SnapshotSettings> snapshot_request(const po::variables_map& vm) {
+  if (!vm.count("snapshots")) {
+    if (vm.count("snapshot-dir")) throw InputError("--snapshot-dir needs --snapshots EVERY_S");
+    return std::nullopt;
+  }
+  return parse_snapshot_settings(vm["snapshots"].as<std::string>(),
+                                 vm.count("snapshot-dir") ? vm["snapshot-dir"].as<std::string>() : std::string(),
+                                 default_snapshot_directory(vm["db"].as<std::string>()));
+}
+
 }  // namespace pdamp

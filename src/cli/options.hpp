@@ -2,8 +2,11 @@
 /// Command-line parsing shared by the CLI's commands (Boost.Program_options).
 
 #include <boost/program_options.hpp>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "pdamp/sim/snapshots.hpp"
 
 namespace pdamp {
 
@@ -24,6 +27,13 @@ CommandLine parse_options(const std::vector<std::string>& args,
 /// The option's value; InputError naming the command if it is missing.
 std::string required_option(const boost::program_options::variables_map& vm, const std::string& name,
                             const std::string& command);
+
+/// --snapshots EVERY_S and --snapshot-dir DIR (pdamp run, compare, study run and resume).
+boost::program_options::options_description snapshot_options();
+
+/// --snapshots and --snapshot-dir, if given (checked against a scenario by plan_run); the
+/// directory defaults to one beside the --db store.
+std::optional<SnapshotSettings> snapshot_request(const boost::program_options::variables_map& vm);
 
 /// A whole number from `min` to `max` given for `what`; InputError otherwise.
 long parse_whole_number(const std::string& text, long min, long max, const std::string& what);

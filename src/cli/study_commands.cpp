@@ -34,10 +34,10 @@ constexpr const char* study_usage =
     "usage: pdamp study <command> [options]\n"
     "\n"
     "commands:\n"
-    "  run STUDY.ini [--jobs N] [--threads N] [--force] [--db FILE]\n"
+    "  run STUDY.ini [--jobs N] [--threads N] [--snapshots EVERY_S [--snapshot-dir DIR]] [--force] [--db FILE]\n"
     "          validate every point, store the study, run its points N at a time; running an\n"
     "          unchanged study again resumes it (completed points are kept)\n"
-    "  resume STUDY_ID [--jobs N] [--threads N] [--db FILE]\n"
+    "  resume STUDY_ID [--jobs N] [--threads N] [--snapshots EVERY_S [--snapshot-dir DIR]] [--db FILE]\n"
     "          run the points of a stored study that are not completed\n"
     "  list [--db FILE]                  the stored studies\n"
     "  show STUDY_ID [--db FILE]         every point of a study: values, status, metrics\n"
@@ -129,6 +129,7 @@ void add_run_options(Subcommand& command) {
       "threads", po::value<std::string>(),
       "soft-engine threads per point (default: the cores shared among the jobs); results are the same bits for any "
       "number");
+  command.add(snapshot_options());
 }
 
 /// The runner's options from the command line, checked before the store is touched.
@@ -138,6 +139,12 @@ StudyRunOptions runner_options(const po::variables_map& vm) {
   options.threads_per_worker = threads_per_worker(vm, options.jobs);
   options.db = vm["db"].as<std::string>();
   options.worker = {"/proc/self/exe", {"study", "run-point"}};
+  if (const auto snapshots = snapshot_request(vm)) {
+    // Each worker writes its runs' snapshots where this process would have.
+    options.worker.arguments.insert(options.worker.arguments.end(),
+                                    {"--snapshots", vm["snapshots"].as<std::string>(), "--snapshot-dir",
+                                     std::filesystem::absolute(snapshots->directory).string()});
+  }
   options.stop = stop_flag();
   return options;
 }
@@ -185,7 +192,7 @@ int study_run(const std::vector<std::string>& args) {
   // Everything that can be wrong with the study is found before the store is touched.
   const StudyRunOptions runner = runner_options(vm);
   Study study = make_study(read_study_source(required_option(vm, "STUDY.ini", "study run")), vm.count("force") > 0);
-  validate_study(study);
+  validate_study(study, snapshot_request(vm));
   RunStore store(vm["db"].as<std::string>());
   const std::int64_t id = find_or_create_study(store, study);
   return run_and_report(store, id, study, runner);
@@ -198,6 +205,7 @@ int study_resume(const std::vector<std::string>& args) {
   const StudyRunOptions runner = runner_options(command.vm());
   OpenStudy open(command.vm(), "study resume", StoreAccess::modify);
   check_study_files(open);
+  if (const auto snapshots = snapshot_request(command.vm())) validate_study(open.study, snapshots);
   return run_and_report(open.store, open.id, open.study, runner);
 }
 
@@ -205,6 +213,7 @@ int study_run_point(const std::vector<std::string>& args) {
   Subcommand command("pdamp study run-point STUDY_ID POINT [options]", {"STUDY_ID", "POINT"});
   command.add_options()("threads", po::value<std::string>(), "soft-engine threads")(
       "report-progress", "progress lines on stdout for the study runner");
+  command.add(snapshot_options());
   if (!command.parse(args)) return 0;
   const auto& vm = command.vm();
   const auto point =
@@ -216,6 +225,7 @@ int study_run_point(const std::vector<std::string>& args) {
   PointRunControl control;
   control.stop = stop_flag();
   control.warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
+  control.snapshots = snapshot_request(vm);
   if (vm.count("report-progress")) {
     std::signal(SIGPIPE, SIG_IGN);  // a runner that is gone must not kill the point before it is stored
     control.progress = [](double fraction, std::string_view phase) {

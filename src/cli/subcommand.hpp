@@ -30,6 +30,7 @@ class Subcommand {
     options_.add(db_option());
   }
   boost::program_options::options_description_easy_init add_options() { return options_.add_options(); }
+  void add(const boost::program_options::options_description& group) { options_.add(group); }
   /// Parses the arguments; false (with the help printed) for --help.
   bool parse(const std::vector<std::string>& args) {
     boost::program_options::options_description all;

@@ -46,8 +46,8 @@ class PointExecution {
   PointRuns run() {
     const Scenario scenario = point_scenario(*study_, study_->points.at(static_cast<std::size_t>(point_ - 1)));
     std::vector<RunPlan> plans;
-    if (study_->file.models != StudyModels::hard) plans.push_back(plan_run(Model::soft, scenario));
-    if (study_->file.models != StudyModels::soft) plans.push_back(plan_run(Model::hard, scenario));
+    if (study_->file.models != StudyModels::hard) plans.push_back(plan_run(Model::soft, scenario, control_->snapshots));
+    if (study_->file.models != StudyModels::soft) plans.push_back(plan_run(Model::hard, scenario, control_->snapshots));
     // Settled (or taken from the store) when the first run needs it, after that run's row.
     std::optional<InitialBed> bed;
     const BedSource bed_source = [&]() -> const InitialBed& {

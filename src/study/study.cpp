@@ -157,14 +157,14 @@ std::string describe_values(const StudyPoint& point) {
   return text;
 }
 
-void validate_study(const Study& study) {
+void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots) {
   std::vector<Model> models;
   if (study.file.models != StudyModels::hard) models.push_back(Model::soft);
   if (study.file.models != StudyModels::soft) models.push_back(Model::hard);
   for (const auto& point : study.points) {
     try {
       const Scenario scenario = point_scenario(study, point);
-      for (const Model model : models) plan_run(model, scenario);
+      for (const Model model : models) plan_run(model, scenario, snapshots);
     } catch (const InputError& e) {
       throw InputError(study.source.study_path.string() + ": point " + std::to_string(point.point) + " of " +
                        std::to_string(study.points.size()) + " ([" + point.section + "] " + describe_values(point) +

@@ -5,9 +5,11 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 
+#include "pdamp/sim/snapshots.hpp"
 #include "pdamp/store/study_store.hpp"
 #include "pdamp/study/study.hpp"
 
@@ -29,6 +31,7 @@ struct PointRunControl {
   /// "soft", "hard").
   std::function<void(double fraction, std::string_view phase)> progress;
   std::function<void(const std::string& warning)> warn;
+  std::optional<SnapshotSettings> snapshots;  ///< each run's snapshots, checked by validate_study
 };
 
 struct PointResult {

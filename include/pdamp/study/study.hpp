@@ -6,11 +6,13 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "pdamp/scenario/scenario.hpp"
+#include "pdamp/sim/snapshots.hpp"
 #include "pdamp/study/study_file.hpp"
 
 namespace pdamp::study {
@@ -56,9 +58,9 @@ Scenario point_scenario(const Study& study, const StudyPoint& point);
 
 /// Builds every point's scenario and checks that each of the study's models can run it,
 /// as `pdamp run` does before it stores anything (plan_run: the run's budget, the hard
-/// model's calibration). Throws InputError for the first point that fails, naming the
+/// model's calibration, the snapshots if asked for). Throws InputError for the first point that fails, naming the
 /// point, its values, the key and what is valid.
-void validate_study(const Study& study);
+void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots = {});
 
 /// What differs between a stored study and the same study read now, one line per
 /// difference (empty if they would run the same points): the [study] keys, each sweep

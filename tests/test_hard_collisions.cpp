@@ -6,6 +6,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
@@ -449,6 +450,42 @@ TEST_CASE("stays_apart: where it holds, the cap and rider root finders find no c
   // Both answers come up often.
   CHECK(apart > 1000);
   CHECK(not_apart > 1000);
+}
+
+TEST_CASE("surely_farther: where it holds, the square root's tests it stands for fail too") {
+  // The rider searches skip the square root where surely_farther holds: the tests they
+  // would have made, |dx| − reach ≤ tolerance (the margin test) and |dx| − σ − closing ≤
+  // slack (the touching bound; stays_apart's likewise), must then have failed. Distances
+  // from nm to m, within a few ulps to a part in 10⁶ of the boundary either way.
+  std::mt19937_64 rng(29);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int farther = 0, not_farther = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const double scale = std::pow(10.0, -9.0 + 9.0 * uniform(rng));
+    const Eigen::Vector3d dx =
+        scale * Eigen::Vector3d(uniform(rng) - 0.5, uniform(rng) - 0.5, uniform(rng) - 0.5).normalized();
+    const double squared = dx.squaredNorm();
+    const double offset = (uniform(rng) < 0.5 ? -1.0 : 1.0) * std::pow(10.0, -16.0 + 10.0 * uniform(rng));
+    const double total = dx.norm() * (1.0 + offset);
+    const double tolerance = total * std::pow(10.0, -12.0 + 10.0 * uniform(rng));
+    const double reach = total - tolerance;
+    if (surely_farther(squared, reach + tolerance)) {
+      ++farther;
+      REQUIRE(!(dx.norm() - reach <= tolerance));
+      const double closing = 0.3 * reach, sigma = reach - closing;
+      REQUIRE(!(dx.norm() - sigma - closing <= tolerance));
+    } else {
+      ++not_farther;
+    }
+  }
+  CHECK(farther > 3000);
+  CHECK(not_farther > 3000);
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  CHECK(!surely_farther(nan, 1.0));
+  CHECK(!surely_farther(1.0, nan));
+  CHECK(!surely_farther(inf, inf));
+  CHECK(surely_farther(4.0, 1.0));
+  CHECK(!surely_farther(1.0, 1.0));
 }
 
 TEST_CASE("side wall under tilted gravity: the quartic's first root, checked by sampling") {

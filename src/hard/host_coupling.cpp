@@ -208,8 +208,13 @@ HostCoupling::TouchingBound HostCoupling::touching_bound(int i, double until_s, 
   if (riding_count_ > 0) {
     const PackedParticles& particles = flight_.particles();
     for (const int j : riders_searched_) {
+      // A rider whose gap surely exceeds the slack changes no deferral (defer_touching
+      // takes the gaps only up to it).
       const Eigen::Vector3d rider = particles.position_m.col(j);
-      const double gap = (position - rider).norm() - (particles.radius_m[i] + particles.radius_m[j]) - closing;
+      const double contact_distance = particles.radius_m[i] + particles.radius_m[j];
+      const double squared = (position - rider).squaredNorm();
+      if (surely_farther(squared, contact_distance + closing + touching_slack_m_)) continue;
+      const double gap = std::sqrt(squared) - contact_distance - closing;
       if (rider.z() > bound.lowest_m) bound.gap_above_m = std::min(bound.gap_above_m, gap);
       if (rider.z() < bound.highest_m) bound.gap_below_m = std::min(bound.gap_below_m, gap);
     }
@@ -286,8 +291,10 @@ bool HostCoupling::within_host_margin(int i, double end_s, double margin_m, doub
   centre.z() -= host.z_m;
   bool within = false;
   for_each_rider_in(centre, Eigen::Vector3d::Constant(r + flight_.max_radius_m() + margin_m), [&](int j) {
-    const double distance = rider_offset_m(f, particles.position_m.col(j), host, gravity_m_s2_, t).norm();
-    within |= distance - (r + particles.radius_m[j] + margin_m) <= tolerance;
+    const double reach = r + particles.radius_m[j] + margin_m;
+    const double squared = rider_offset_m(f, particles.position_m.col(j), host, gravity_m_s2_, t).squaredNorm();
+    if (surely_farther(squared, reach + tolerance)) return;
+    within |= std::sqrt(squared) - reach <= tolerance;
   });
   return within;
 }
@@ -342,11 +349,17 @@ HostCoupling::HostContact HostCoupling::host_contact(int i, double end_s, double
   // The distance to a rider closes at most at the relative speed, which grows at most by
   // |g| + |z_h''|.
   const double speed = velocity.norm(), rider_curvature = gravity_m_s2_.norm() + acceleration_bound;
+  // How far the gap can close within the span: a rider farther than that beyond contact
+  // (and twice the tolerance) stays apart without its distance taken.
+  const double reach_beyond_contact =
+      2.0 * tolerance + std::abs(span) * (speed + 0.5 * rider_curvature * std::abs(span));
   for_each_rider_in(centre, half, [&](int j) {
     if (riders_searched) riders_searched->push_back(j);
     const auto rider = particles.position_m.col(j);
     const double contact_distance = r + particles.radius_m[j] + margin_m;
-    const double gap = (centre - rider).norm() - contact_distance;
+    const double squared = (centre - rider).squaredNorm();
+    if (surely_farther(squared, contact_distance + reach_beyond_contact)) return;
+    const double gap = std::sqrt(squared) - contact_distance;
     if (stays_apart(gap, -speed, rider_curvature, span, tolerance)) return;
     consider(
         rider_contact(f, rider, contact_distance, trajectory_, host, gravity_m_s2_, t, window_end, tolerance, closing),

@@ -214,6 +214,17 @@ inline bool stays_apart(double gap_m, double rate_m_s, double curvature_bound, d
   return lowest > 2.0 * tolerance_m;
 }
 
+/// Whether a distance whose square is `squared_norm_m2` surely exceeds `distance_m` by
+/// more than the round-off of a square root and a few additions (a relative 5·10⁻¹¹): then
+/// a test of the distance, `std::sqrt(squared_norm_m2)` as Eigen's norm() takes it, against
+/// `distance_m` or anything below it is settled without the square root. False where it
+/// cannot tell (NaN, infinity). Most riders a sphere's search meets in a bed are a
+/// diameter away: their tests end here.
+inline bool surely_farther(double squared_norm_m2, double distance_m) {
+  const double beyond = distance_m * (1.0 + 1e-10);
+  return squared_norm_m2 > beyond * beyond;
+}
+
 /// A free sphere's gap to the bottom (z − r − z_h) or top (z_h + H − z − r) cap at time
 /// t, the host then at `host` (cap_contact's gap, to the bit).
 inline double cap_gap_m(const Ballistic& flight, double radius_m, bool top, double height_m, const HostState& host,

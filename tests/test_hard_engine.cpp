@@ -467,6 +467,7 @@ TEST_CASE("jam: Table 4's 250 Hz bed, hit by a cap at 15 m/s, gets past the wedg
     void record_sample(const Observation&, double) override {}
     void record_cycle(const CycleRecord&) override {}
     void flush() override {}
+    void flush_with_checkpoint(const RunCheckpoint&) override {}
   } discard;
   const RunOutcome outcome = run_simulation(engine, s, discard);
   CHECK_MESSAGE(outcome.status == RunStatus::completed, outcome.message);

@@ -34,6 +34,8 @@ class FaultyEngine final : public Engine {
   State state() const override { return {observe(), Particles(0)}; }
   SphereDissipation dissipation_by_sphere() const override { return {}; }
   double time_step_s() const override { return 0.0; }
+  void save(CheckpointWriter& out) const override { out.put(t_s_); }
+  void restore(CheckpointReader& in) override { in.get(t_s_); }
 
  private:
   Fault fault_;
@@ -45,6 +47,7 @@ struct CountSamples final : RunRecorder {
   void record_sample(const Observation&, double) override { ++samples; }
   void record_cycle(const CycleRecord&) override {}
   void flush() override {}
+  void flush_with_checkpoint(const RunCheckpoint&) override {}
 };
 
 const Scenario host_alone = test::scenario_from("[particles]\ncount = 0\n[run]\nduration_s = 0.1\n");

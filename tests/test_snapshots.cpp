@@ -36,6 +36,7 @@ struct Discard final : RunRecorder {
   void record_sample(const Observation&, double) override {}
   void record_cycle(const CycleRecord&) override {}
   void flush() override {}
+  void flush_with_checkpoint(const RunCheckpoint&) override {}
 };
 
 struct Result {

@@ -8,8 +8,8 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/study_store.hpp"
-#include "pdamp/study/lease.hpp"
 #include "pdamp/study/study.hpp"
 #include "test_support.hpp"
 

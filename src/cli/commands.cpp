@@ -32,11 +32,18 @@ extern "C" void request_stop(int signal_number) {
   stop_requested.store(true);
 }
 
+/// A run's status, with the host of a run running on another one (whose process cannot
+/// be checked from here).
+std::string status_text(const RunSummary& s) {
+  if (s.status == "running" && s.lease && s.lease->host != this_host_name()) return "running on " + s.lease->host;
+  return s.status;
+}
+
 void print_summary(RunStore& store, std::int64_t run_id, std::ostream& out) {
   const auto s = store.summary(run_id);
   if (!s) throw InputError("run " + std::to_string(run_id) + " is not in '" + store.file().string() + "'");
   out << "run " << s->run_id << ": " << s->model << " model, scenario '" << printable(s->scenario_name) << "', "
-      << s->status;
+      << status_text(*s);
   if (!s->message.empty()) out << " (" << printable(s->message) << ")";
   out << "\n  particles               " << s->n_particles << "\n  simulated               " << s->sim_time_s << " s of "
       << s->duration_s << " s\n  wall time               " << format_optional(s->wall_time_s) << " s"
@@ -95,10 +102,13 @@ class CommandBed {
   std::optional<InitialBed> bed_;
 };
 
-/// Stops on SIGINT and SIGTERM; reports progress as the phase `label` of the scenario's duration.
-RunControl run_control(const Scenario& scenario, Progress& progress, const std::string& label) {
+/// Stops on SIGINT and SIGTERM; reports progress as the phase `label` of the scenario's
+/// duration; checkpoints at `checkpoint_interval`.
+RunControl run_control(const Scenario& scenario, Progress& progress, const std::string& label,
+                       std::chrono::milliseconds checkpoint_interval) {
   RunControl control;
   control.stop = &stop_requested;
+  control.checkpoint_interval = checkpoint_interval;
   control.progress = [&progress, label, duration = scenario.run.duration_s, begun = false](double t) mutable {
     if (!begun) progress.begin(label, duration);
     begun = true;
@@ -136,7 +146,8 @@ int exit_code(const StoredRun& run) {
 }  // namespace
 
 int run_command(const ScenarioRequest& request, const std::string& model_name, const std::filesystem::path& db,
-                const std::optional<SnapshotSettings>& snapshots, bool terminal, bool diagnose_events) {
+                const std::optional<SnapshotSettings>& snapshots, bool terminal,
+                std::chrono::milliseconds checkpoint_interval, bool diagnose_events) {
   // Everything that can be wrong with the input is found before the store is touched.
   const Model model = parse_model(model_name);
   if (diagnose_events && model != Model::hard) {
@@ -153,7 +164,28 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
   CommandBed bed(scenario, store, progress);
   const StoredRun run =
       run_and_store(store, plan, bed.source(),
-                    run_control(scenario, progress, std::string(to_string(model)) + " model"), warnings_to(progress));
+                    run_control(scenario, progress, std::string(to_string(model)) + " model", checkpoint_interval),
+                    warnings_to(progress));
+  progress.end();
+  print_summary(store, run.run_id, std::cout);
+  return exit_code(run);
+}
+
+int resume_command(const std::string& run_id_text, std::optional<double> until_s, const std::filesystem::path& db,
+                   bool terminal, std::chrono::milliseconds checkpoint_interval) {
+  const std::int64_t run_id = parse_run_id(run_id_text);
+  RunStore store(db, StoreAccess::modify);
+  install_stop_handlers();
+  Progress progress(std::cerr, terminal);
+  RunControl control;
+  control.stop = &stop_requested;
+  control.checkpoint_interval = checkpoint_interval;
+  control.progress = [&progress, begun = false](double t) mutable {
+    if (!begun) progress.begin("resumed run");
+    begun = true;
+    progress.update(t);
+  };
+  const StoredRun run = resume_and_store(store, run_id, until_s, control, warnings_to(progress));
   progress.end();
   print_summary(store, run.run_id, std::cout);
   return exit_code(run);
@@ -196,7 +228,8 @@ void print_comparison(RunStore& store, std::int64_t id, const ComparisonRecord& 
 }  // namespace
 
 int compare_command(const ScenarioRequest& request, const std::filesystem::path& db,
-                    const std::optional<SnapshotSettings>& snapshots, bool terminal) {
+                    const std::optional<SnapshotSettings>& snapshots, bool terminal,
+                    std::chrono::milliseconds checkpoint_interval) {
   const Scenario scenario = load_scenario(request.file, request.overrides);
   const RunPlan plans[2] = {plan_run(Model::soft, scenario, snapshots), plan_run(Model::hard, scenario, snapshots)};
 
@@ -208,8 +241,8 @@ int compare_command(const ScenarioRequest& request, const std::filesystem::path&
   for (const RunPlan& plan : plans) {
     const std::string label = std::string(to_string(plan.model)) + " model";
     progress.message("pdamp: " + label);
-    const StoredRun run =
-        run_and_store(store, plan, bed.source(), run_control(scenario, progress, label), warnings_to(progress));
+    const StoredRun run = run_and_store(
+        store, plan, bed.source(), run_control(scenario, progress, label, checkpoint_interval), warnings_to(progress));
     progress.end();
     run_ids[plan.model == Model::hard] = run.run_id;
     if (const auto written = store.snapshots(run.run_id)) {
@@ -254,7 +287,7 @@ int list_runs_command(const std::filesystem::path& db) {
                    {"balance", true},
                    {"cycles", true}});
   for (const auto& s : store.list_runs()) {
-    table.add_row({std::to_string(s.run_id), s.model, s.scenario_name, s.status, std::to_string(s.n_particles),
+    table.add_row({std::to_string(s.run_id), s.model, s.scenario_name, status_text(s), std::to_string(s.n_particles),
                    format_number(s.sim_time_s), format_optional(s.wall_time_s),
                    format_optional(s.energy_balance_rel_err, 2), std::to_string(s.n_cycles)});
   }

@@ -2,6 +2,8 @@
 /// The CLI's commands, each returning the process exit code.
 
 #include <atomic>
+#include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -18,16 +20,22 @@ struct ScenarioRequest {
 };
 
 /// `terminal`: whether stderr is one (progress redrawn in place) or a log (a line now and then);
+/// `checkpoint_interval`: wall time between checkpoints (0: none, RunControl);
 /// `diagnose_events`: the hard model counts where its collisions come from (RunPlan).
 int run_command(const ScenarioRequest& request, const std::string& model, const std::filesystem::path& db,
-                const std::optional<SnapshotSettings>& snapshots, bool terminal, bool diagnose_events = false);
+                const std::optional<SnapshotSettings>& snapshots, bool terminal,
+                std::chrono::milliseconds checkpoint_interval, bool diagnose_events = false);
+/// Continues a run from its checkpoint, to its end or to `until_s` (pdamp resume).
+int resume_command(const std::string& run_id, std::optional<double> until_s, const std::filesystem::path& db,
+                   bool terminal, std::chrono::milliseconds checkpoint_interval);
 int list_runs_command(const std::filesystem::path& db);
 int show_run_command(const std::string& run_id, const std::filesystem::path& db);
 /// `force`: also runs still marked running.
 int delete_runs_command(const std::vector<std::string>& run_ids, const std::filesystem::path& db, bool force);
 int check_command(const ScenarioRequest& request);
 int compare_command(const ScenarioRequest& request, const std::filesystem::path& db,
-                    const std::optional<SnapshotSettings>& snapshots, bool terminal);
+                    const std::optional<SnapshotSettings>& snapshots, bool terminal,
+                    std::chrono::milliseconds checkpoint_interval);
 /// Sets the number of threads (--threads); throws InputError unless it is 1 to 1024.
 void set_thread_count(const std::string& text);
 

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <boost/program_options.hpp>
+#include <chrono>
 #include <csignal>
 #include <iostream>
 #include <string>
@@ -32,6 +33,8 @@ constexpr const char* usage =
     "  run     --scenario FILE --model soft|hard [--set k=v ...] [--db FILE] [--duration S]\n"
     "          [--snapshots EVERY_S [--snapshot-dir DIR]]\n"
     "          simulate a scenario and store the run (and snapshots for ParaView)\n"
+    "  resume  RUN_ID [--until T] [--db FILE]\n"
+    "          continue an interrupted or killed run from its checkpoint (or extend a completed one to T)\n"
     "  runs    [--db FILE]            list the stored runs\n"
     "  show    RUN_ID [--db FILE]     summary of one run\n"
     "  delete  RUN_ID... [--db FILE] [--force]\n"
@@ -67,6 +70,19 @@ po::options_description duration_option() {
   return o;
 }
 
+po::options_description checkpoint_option() {
+  po::options_description o("checkpoints (docs/checkpoints.md)");
+  o.add_options()("checkpoint-every", po::value<std::string>()->value_name("SECONDS")->default_value("60"),
+                  "save the run's state in the store every SECONDS of wall time, with the results up to it, so that "
+                  "`pdamp resume` continues it if it is stopped or killed; 0: no checkpoints");
+  return o;
+}
+
+std::chrono::milliseconds checkpoint_interval(const po::variables_map& vm) {
+  const double seconds = parse_seconds(vm["checkpoint-every"].as<std::string>(), 0.0, true, 1e6, "--checkpoint-every");
+  return std::chrono::ceil<std::chrono::milliseconds>(std::chrono::duration<double>(seconds));
+}
+
 /// The scenario file with --set and --duration, in the order given (the last of a key wins).
 ScenarioRequest scenario_request(const CommandLine& line, const std::string& command) {
   ScenarioRequest request{required_option(line.vm, "scenario", command), {}};
@@ -86,6 +102,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   if (command == "run") {
     po::options_description options("pdamp run --scenario FILE --model soft|hard [options]");
     options.add(help).add(scenario_options()).add(duration_option()).add(db_option()).add(snapshot_options());
+    options.add(checkpoint_option());
     options.add_options()("model", po::value<std::string>(), "soft (Hertz DEM) or hard (event-driven)")(
         "threads", po::value<std::string>(),
         "threads for the soft engine (default: one per core); results are the same bits for any number")(
@@ -106,11 +123,12 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
     if (vm.count("simd")) set_instruction_set(vm["simd"].as<std::string>(), "--simd");
     return run_command(request, required_option(vm, "model", command), vm["db"].as<std::string>(), snapshot_request(vm),
-                       isatty(STDERR_FILENO) != 0, vm.count("diagnose-events") > 0);
+                       isatty(STDERR_FILENO) != 0, checkpoint_interval(vm), vm.count("diagnose-events") > 0);
   }
   if (command == "compare") {
     po::options_description options("pdamp compare --scenario FILE [options]");
     options.add(help).add(scenario_options()).add(duration_option()).add(db_option()).add(snapshot_options());
+    options.add(checkpoint_option());
     options.add_options()("threads", po::value<std::string>(), "threads for the soft engine (default: one per core)");
     const CommandLine line = parse_options(args, options);
     const po::variables_map& vm = line.vm;
@@ -120,7 +138,8 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     }
     const ScenarioRequest request = scenario_request(line, command);
     if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
-    return compare_command(request, vm["db"].as<std::string>(), snapshot_request(vm), isatty(STDERR_FILENO) != 0);
+    return compare_command(request, vm["db"].as<std::string>(), snapshot_request(vm), isatty(STDERR_FILENO) != 0,
+                           checkpoint_interval(vm));
   }
   if (command == "runs") {
     po::options_description options("pdamp runs [--db FILE]");
@@ -131,6 +150,29 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
       return 0;
     }
     return list_runs_command(vm["db"].as<std::string>());
+  }
+  if (command == "resume") {
+    po::options_description options("pdamp resume RUN_ID [--until T] [--db FILE]");
+    options.add(help).add(db_option()).add(checkpoint_option());
+    options.add_options()("run-id", po::value<std::string>(), "run to continue")(
+        "until", po::value<std::string>()->value_name("T"),
+        "simulated time to run to (s), beyond the run's end: extends a completed run; the result is the same bits "
+        "as a run of that duration")("threads", po::value<std::string>(),
+                                     "threads for the soft engine (default: one per core); the same bits for any");
+    po::positional_options_description positional;
+    positional.add("run-id", 1);
+    const po::variables_map vm = parse_options(args, options, positional).vm;
+    if (vm.count("help")) {
+      std::cout << options << "\n";
+      return 0;
+    }
+    const std::string run_id = required_option(vm, "run-id", command);
+    const std::optional<double> until =
+        vm.count("until") ? std::optional(parse_seconds(vm["until"].as<std::string>(), 0.0, false, 1e9, "--until"))
+                          : std::nullopt;
+    if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
+    return resume_command(run_id, until, vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0,
+                          checkpoint_interval(vm));
   }
   if (command == "show") {
     po::options_description options("pdamp show RUN_ID [--db FILE]");

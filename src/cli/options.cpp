@@ -1,6 +1,8 @@
 #include "options.hpp"
 
 #include <charconv>
+#include <cmath>
+#include <sstream>
 
 #include "pdamp/errors.hpp"
 
@@ -62,6 +64,19 @@ std::optional<SnapshotSettings> snapshot_request(const po::variables_map& vm) {
   return parse_snapshot_settings(vm["snapshots"].as<std::string>(),
                                  vm.count("snapshot-dir") ? vm["snapshot-dir"].as<std::string>() : std::string(),
                                  default_snapshot_directory(vm["db"].as<std::string>()));
+}
+
+double parse_seconds(const std::string& text, double min_s, bool min_allowed, double max_s, const std::string& what) {
+  double value = 0.0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  const bool above_min = min_allowed ? value >= min_s : value > min_s;
+  if (ec != std::errc() || ptr != end || !std::isfinite(value) || !above_min || value > max_s) {
+    std::ostringstream range;
+    range << (min_allowed ? "at least " : "above ") << min_s << " s and at most " << max_s << " s";
+    throw InputError(what + " '" + text + "': must be a number of seconds " + range.str());
+  }
+  return value;
 }
 
 }  // namespace pdamp

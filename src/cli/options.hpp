@@ -38,4 +38,8 @@ std::optional<SnapshotSettings> snapshot_request(const boost::program_options::v
 /// A whole number from `min` to `max` given for `what`; InputError otherwise.
 long parse_whole_number(const std::string& text, long min, long max, const std::string& what);
 
+/// A finite number of seconds given for `what`, at least `min_s` (or above it if not
+/// `min_allowed`) and at most `max_s`; InputError naming the range otherwise.
+double parse_seconds(const std::string& text, double min_s, bool min_allowed, double max_s, const std::string& what);
+
 }  // namespace pdamp

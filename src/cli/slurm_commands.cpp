@@ -16,7 +16,7 @@
 #include "pdamp/slurm/collect.hpp"
 #include "pdamp/slurm/program.hpp"
 #include "pdamp/slurm/shard_task.hpp"
-#include "pdamp/study/lease.hpp"
+#include "pdamp/store/process_lease.hpp"
 #include "pdamp/study/study_runner.hpp"
 #include "subcommand.hpp"
 #include "text_table.hpp"
@@ -408,8 +408,8 @@ int study_task(const std::vector<std::string>& args) {
   control.stop = stop_flag();
   control.warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
   std::cout << "pdamp: task " << request.task << " of job " << request.job << " (point " << request.point << ") on "
-            << printable(study::this_process_lease().host) << ", shard folder "
-            << printable(request.folder.path().string()) << std::endl;
+            << printable(this_process_lease().host) << ", shard folder " << printable(request.folder.path().string())
+            << std::endl;
   control.progress = progress_lines(static_cast<int>(request.point));
   const ShardTaskResult result = run_shard_task(request, control);
   std::cout << "pdamp: point " << request.point << " of study " << result.study_id << " "

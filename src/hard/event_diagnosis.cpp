@@ -18,7 +18,7 @@ constexpr const char* speed_names[] = {"v_below_1e-4", "v_1e-4_1e-3", "v_1e-3_1e
 }  // namespace
 
 EventDiagnosis::EventDiagnosis(const Scenario& scenario)
-    : sphere_kn_N_m1_5_(scenario.soft_particle.kn_N_m1_5), wall_kn_N_m1_5_(scenario.soft_wall.kn_N_m1_5) {}
+    : EventDiagnosis(scenario.soft_particle.kn_N_m1_5, scenario.soft_wall.kn_N_m1_5) {}
 
 EventDiagnosis::Interval EventDiagnosis::interval_of(double since_previous_s, double contact_time_s) {
   if (std::isinf(since_previous_s)) return first;

@@ -64,4 +64,13 @@ std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const
   return engine_kind(model).make(scenario, initial, calibration, diagnose_events);
 }
 
+std::unique_ptr<Engine> restore_engine(Model model, const Scenario& scenario, const Particles& initial,
+                                       const RestitutionTable* calibration, bool diagnose_events,
+                                       CheckpointReader& checkpoint) {
+  auto engine = make_engine(model, scenario, initial, calibration, diagnose_events);
+  engine->restore(checkpoint);
+  checkpoint.finish();
+  return engine;
+}
+
 }  // namespace pdamp

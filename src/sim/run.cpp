@@ -5,11 +5,13 @@
 #include <cmath>
 #include <exception>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "pdamp/analysis/cycle_analyzer.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/model/host.hpp"
+#include "pdamp/sim/run_checkpoint.hpp"
 
 namespace pdamp {
 
@@ -50,11 +52,15 @@ void require_finite(const Observation& o) {
 
 }  // namespace
 
-RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder, const RunControl& control) {
+RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder, const RunControl& control,
+                          const RunLoopState* resume) {
   using clock = std::chrono::steady_clock;
   const auto wall_start = clock::now();
   auto next_progress = wall_start;
+  const bool checkpoints = control.checkpoint_interval.count() > 0;
+  auto next_checkpoint = wall_start + control.checkpoint_interval;
   RunOutcome outcome;
+  double wall_before_s = 0.0;  // of the processes that ran it before this one
   const double duration = scenario.run.duration_s;
   const double sample_interval = scenario.run.sample_interval_s;
   const auto [observations_per_sample, h] = observation_grid(scenario);
@@ -63,12 +69,15 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
     outcome.status = RunStatus::interrupted;
     outcome.message = "stopped by a signal at t = " + std::to_string(outcome.sim_time_s) + " s";
   };
+  auto wall_time_s = [&] { return wall_before_s + std::chrono::duration<double>(clock::now() - wall_start).count(); };
+  // The checkpoint to store with the results when the run completes: its last state, or
+  // the one before a last step that ends off the grid (another run, longer, never stops there).
+  std::optional<RunCheckpoint> last_checkpoint;
   engine.set_stop_request(control.stop);
   try {
-    CycleAnalyzer cycles = make_cycle_analyzer(scenario, engine.state().particles);
+    CycleAnalyzer cycles = resume ? resume->cycles : make_cycle_analyzer(scenario, engine.state().particles);
     Observation now = engine.observe();
     require_finite(now);
-    outcome.initial_energy_J = now.energy.stored_J();
     auto record = [&](bool is_sample) {
       const double error = now.energy.balance_relative_error(outcome.initial_energy_J);
       outcome.energy_balance_rel_err = std::max(outcome.energy_balance_rel_err, error);
@@ -82,14 +91,29 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
       }
       outcome.sim_time_s = now.t_s;
     };
-    record(true);
-    if (control.at_observation) control.at_observation(engine, {0, true});
-    for (long k = 0; now.t_s < duration; ++k) {
-      for (long j = 1; j <= observations_per_sample && now.t_s < duration; ++j) {
+    auto checkpoint = [&](std::int64_t k, std::int64_t j) {
+      RunLoopState state{k, j, outcome, cycles};
+      state.outcome.wall_time_s = wall_time_s();
+      return save_checkpoint(state, engine, now.t_s);
+    };
+    std::int64_t k0 = 0, j0 = 0;
+    if (resume) {
+      outcome = resume->outcome;
+      wall_before_s = resume->outcome.wall_time_s;
+      k0 = resume->interval;
+      j0 = resume->step;
+    } else {
+      outcome.initial_energy_J = now.energy.stored_J();
+      record(true);
+      if (control.at_observation) control.at_observation(engine, {0, true});
+    }
+    for (std::int64_t k = k0; now.t_s < duration; ++k) {
+      for (std::int64_t j = k == k0 ? j0 + 1 : 1; j <= observations_per_sample && now.t_s < duration; ++j) {
         const double t = j == observations_per_sample
                              ? static_cast<double>(k + 1) * sample_interval
                              : static_cast<double>(k) * sample_interval + static_cast<double>(j) * h;
         const double target = std::min(t, duration);
+        if (checkpoints && target < t) last_checkpoint = checkpoint(k, j - 1);
         engine.advance_to(target);
         now = engine.observe();
         require_finite(now);
@@ -97,7 +121,15 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
         if (control.at_observation) {
           control.at_observation(engine, {k * observations_per_sample + j, t - target <= 1e-9 * h});
         }
-        if (control.stop && control.stop->load()) {
+        const bool stop = control.stop && control.stop->load();
+        if (checkpoints && target == t && (stop || now.t_s >= duration || clock::now() >= next_checkpoint)) {
+          last_checkpoint = checkpoint(k, j);
+          if (now.t_s < duration) {
+            recorder.flush_with_checkpoint(*last_checkpoint);
+            next_checkpoint = clock::now() + control.checkpoint_interval;
+          }
+        }
+        if (stop) {
           interrupted();
           break;
         }
@@ -109,18 +141,24 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
       if (outcome.status == RunStatus::interrupted) break;
     }
   } catch (const Interrupted&) {
-    interrupted();  // inside the engine: the last observation stands
+    interrupted();  // inside the engine: the last observation stands, the last checkpoint before it
+    last_checkpoint.reset();
   } catch (const std::exception& e) {
     outcome.status = RunStatus::failed;
     outcome.message = e.what();
+    last_checkpoint.reset();
   }
   try {
-    recorder.flush();
+    if (last_checkpoint) {
+      recorder.flush_with_checkpoint(*last_checkpoint);
+    } else {
+      recorder.flush();
+    }
   } catch (const std::exception& e) {
     outcome.status = RunStatus::failed;
     outcome.message += (outcome.message.empty() ? "" : "; ") + std::string("results not all stored: ") + e.what();
   }
-  outcome.wall_time_s = std::chrono::duration<double>(clock::now() - wall_start).count();
+  outcome.wall_time_s = wall_time_s();
   return outcome;
 }
 

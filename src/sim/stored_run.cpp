@@ -3,11 +3,13 @@
 #include <omp.h>
 #include <sys/resource.h>
 
+#include <charconv>
 #include <chrono>
 #include <memory>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
+#include "pdamp/scenario/scenario_loader.hpp"
 #include "pdamp/sim/calibration.hpp"
 
 namespace pdamp {
@@ -46,6 +48,24 @@ void store_engine_statistics(RunStore& store, std::int64_t run_id, const Engine&
   getrusage(RUSAGE_SELF, &usage);
   statistics.emplace_back("peak_memory_kB", usage.ru_maxrss);
   store.save_statistics(run_id, statistics);
+}
+
+/// Appends the engine's warnings to the outcome's message (and tells `warn`), and stores
+/// its statistics.
+void store_engine_results(RunStore& store, std::int64_t run_id, const Engine& engine, RunOutcome& outcome,
+                          const std::function<void(const std::string&)>& warn) {
+  for (const auto& warning : engine.warnings()) {
+    if (warn) warn(warning);
+    outcome.message += (outcome.message.empty() ? "warning: " : "; warning: ") + warning;
+  }
+  store_engine_statistics(store, run_id, engine);
+}
+
+/// A number as text that reads back as the same double.
+std::string exact_text(double value) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+  return std::string(text, end);
 }
 
 }  // namespace
@@ -98,16 +118,40 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
       }
       result.outcome = run_simulation(*engine, scenario, writer, with_snapshots);
     }
-    for (const auto& warning : engine->warnings()) {
-      if (warn) warn(warning);
-      result.outcome.message += (result.outcome.message.empty() ? "warning: " : "; warning: ") + warning;
-    }
-    store_engine_statistics(store, result.run_id, *engine);
+    store_engine_results(store, result.run_id, *engine, result.outcome, warn);
   } else {
     result.outcome.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   }
   if (snapshots) store.save_snapshots(result.run_id, snapshot_record(*snapshots, *plan.snapshots));
   store.finish_run(result.run_id, result.outcome);
+  return result;
+}
+
+StoredRun resume_and_store(RunStore& store, std::int64_t run_id, std::optional<double> until_s,
+                           const RunControl& control, const std::function<void(const std::string&)>& warn) {
+  const ResumableRun run = store.resumable_run(run_id, until_s);
+  const Model model = parse_model(run.model);
+  ScenarioOverrides overrides;
+  if (until_s) overrides.push_back("run.duration_s=" + exact_text(*until_s));
+  const Scenario scenario = parse_scenario(run.scenario_text, "resumed",
+                                           "run " + std::to_string(run_id) + "'s scenario", overrides, "--until");
+  const RunPlan plan = plan_run(model, scenario);
+  const Particles bed = run.initial_state_id ? store.load_initial_particles(*run.initial_state_id) : Particles(0);
+  // Restored before the store is touched: a checkpoint that does not fit changes nothing.
+  CheckpointReader checkpoint(run.checkpoint.state);
+  const RunLoopState loop = read_run_loop_state(checkpoint);
+  const auto engine =
+      restore_engine(model, scenario, bed, plan.calibration ? &*plan.calibration : nullptr, false, checkpoint);
+  store.claim_for_resume(run, scenario.run.duration_s, scenario.canonical_text);
+  if (store.snapshots(run_id) && warn)
+    warn("a resumed run writes no snapshots: run " + std::to_string(run_id) + "'s stop where it was stopped");
+  StoredRun result{run_id, {}};
+  {
+    RunWriter writer(store, run_id);
+    result.outcome = run_simulation(*engine, scenario, writer, control, &loop);
+  }
+  store_engine_results(store, run_id, *engine, result.outcome, warn);
+  store.finish_run(run_id, result.outcome);
   return result;
 }
 

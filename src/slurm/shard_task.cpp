@@ -7,8 +7,8 @@
 #include <cstring>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/study_store.hpp"
-#include "pdamp/study/lease.hpp"
 
 namespace pdamp::slurm {
 namespace {
@@ -46,7 +46,7 @@ study::PointResult run_in_shard(const std::filesystem::path& work, const study::
   const study::StudyPoint& point = study.points.at(static_cast<std::size_t>(r.point - 1));
   studies.add_points(record.study_id, {{point.point, point.section, point.values}});
   StudyTask task = StudyTask::of(r.job, r.task, point.point);
-  task.host = study::this_process_lease().host;
+  task.host = this_process_lease().host;
   studies.begin_task(record.study_id, task);
   const study::PointResult result = study::run_study_point(store, record.study_id, study, point.point, control);
   studies.end_task(record.study_id, r.job, r.task, result.status, result.message);

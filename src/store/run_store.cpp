@@ -54,9 +54,10 @@ class ForeignKeysOff {
 };
 
 constexpr std::string_view summary_columns =
-    "SELECT run_id, model, scenario_name, status, n_particles, duration_s, sim_time_s, wall_time_s, "
-    "energy_balance_rel_err, n_samples, n_cycles, dissipated_impact_J, dissipated_friction_J, "
-    "dissipated_viscous_J, started_at, message FROM run_summary";
+    "SELECT v.run_id, v.model, v.scenario_name, v.status, v.n_particles, v.duration_s, v.sim_time_s, v.wall_time_s, "
+    "v.energy_balance_rel_err, v.n_samples, v.n_cycles, v.dissipated_impact_J, v.dissipated_friction_J, "
+    "v.dissipated_viscous_J, v.started_at, v.message, r.lease_host, r.lease_pid, r.lease_start "
+    "FROM run_summary v JOIN runs r ON r.run_id = v.run_id";
 
 RunSummary read_summary(const sqlite::Statement& row) {
   RunSummary s;
@@ -76,6 +77,10 @@ RunSummary read_summary(const sqlite::Statement& row) {
   s.dissipated_viscous_J = row.column_optional_double(13);
   s.started_at = row.column_text(14);
   s.message = row.column_text(15);
+  if (s.status == "running" && !row.is_null(16)) {
+    s.lease = ProcessLease{row.column_text(16), row.column_int(17), row.column_int(18)};
+    if (!lease_is_alive(*s.lease)) s.status = "dead";
+  }
   return s;
 }
 
@@ -238,7 +243,9 @@ std::int64_t RunStore::begin_run(const NewRun& run) {
   return sqlite::write_transaction(*db_, [&] {
     sqlite::Statement insert(*db_,
                              "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, "
-                             "pdamp_version, status, started_at) VALUES (?, ?, ?, ?, ?, ?, ?, 'running', ?)");
+                             "pdamp_version, status, started_at, lease_host, lease_pid, lease_start) "
+                             "VALUES (?, ?, ?, ?, ?, ?, ?, 'running', ?, ?, ?, ?)");
+    const ProcessLease lease = this_process_lease();
     insert.bind(1, run.model)
         .bind(2, run.scenario_name)
         .bind(3, run.scenario_text)
@@ -246,7 +253,10 @@ std::int64_t RunStore::begin_run(const NewRun& run) {
         .bind(5, run.n_particles)
         .bind(6, run.duration_s)
         .bind(7, std::string_view(version_string))
-        .bind(8, utc_now_iso8601());
+        .bind(8, utc_now_iso8601())
+        .bind(9, lease.host)
+        .bind(10, lease.pid)
+        .bind(11, lease.start_ticks);
     insert.run();
     return db_->last_insert_rowid();
   });
@@ -262,7 +272,7 @@ void RunStore::start_run(std::int64_t run_id, const RunStart& start) {
 }
 
 void RunStore::append_results(std::int64_t run_id, std::span<const SampleRecord> samples,
-                              std::span<const CycleRecord> cycles) {
+                              std::span<const CycleRecord> cycles, const RunCheckpoint* checkpoint) {
   sqlite::write_transaction(*db_, [&] {
     sqlite::Statement sample(*db_, "INSERT INTO samples (run_id, " + std::string(sample_columns) +
                                        ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
@@ -270,6 +280,7 @@ void RunStore::append_results(std::int64_t run_id, std::span<const SampleRecord>
     sqlite::Statement cycle(*db_, "INSERT INTO cycles (run_id, " + std::string(cycle_columns) +
                                       ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (const CycleRecord& c : cycles) insert_cycle(cycle, run_id, c);
+    if (checkpoint) replace_checkpoint(run_id, *checkpoint);
   });
 }
 
@@ -339,7 +350,8 @@ void RunStore::finish_run(std::int64_t run_id, const RunEnd& end) {
   sqlite::write_transaction(*db_, [&] {
     sqlite::Statement update(*db_,
                              "UPDATE runs SET status = ?, message = ?, sim_time_s = ?, wall_time_s = ?, "
-                             "initial_energy_J = ?, energy_balance_rel_err = ?, ended_at = ? WHERE run_id = ?");
+                             "initial_energy_J = ?, energy_balance_rel_err = ?, ended_at = ?, lease_host = NULL, "
+                             "lease_pid = NULL, lease_start = NULL WHERE run_id = ?");
     update.bind(1, to_string(end.status))
         .bind(2, end.message)
         .bind(3, end.sim_time_s)
@@ -467,14 +479,14 @@ std::optional<SnapshotRecord> RunStore::snapshots(std::int64_t run_id) {
 }
 
 std::vector<RunSummary> RunStore::list_runs() {
-  sqlite::Statement query(*db_, std::string(summary_columns) + " ORDER BY run_id");
+  sqlite::Statement query(*db_, std::string(summary_columns) + " ORDER BY v.run_id");
   std::vector<RunSummary> runs;
   while (query.step()) runs.push_back(read_summary(query));
   return runs;
 }
 
 std::optional<RunSummary> RunStore::summary(std::int64_t run_id) {
-  sqlite::Statement query(*db_, std::string(summary_columns) + " WHERE run_id = ?");
+  sqlite::Statement query(*db_, std::string(summary_columns) + " WHERE v.run_id = ?");
   query.bind(1, run_id);
   if (!query.step()) return std::nullopt;
   return read_summary(query);
@@ -503,9 +515,11 @@ std::vector<DeletedRun> RunStore::delete_runs(std::span<const std::int64_t> run_
                          "' (see pdamp runs); nothing was deleted");
       }
       if (run->status == "running" && !including_running) {
-        throw InputError("run " + std::to_string(id) +
-                         " is running, or was killed (a killed run stays 'running'); nothing was deleted. "
-                         "--force deletes it anyway (a run still going then fails)");
+        const std::string where =
+            run->lease ? " in process " + std::to_string(run->lease->pid) + " on " + run->lease->host : "";
+        throw InputError("run " + std::to_string(id) + " is running" + where +
+                         " (a run whose process is gone shows as dead and is deleted without --force); nothing was "
+                         "deleted. --force deletes it anyway (a run still going then fails)");
       }
       comparisons.bind(1, id);
       comparisons.step();
@@ -553,7 +567,16 @@ void RunWriter::flush_if_due() {
 void RunWriter::flush() {
   last_flush_ = std::chrono::steady_clock::now();
   if (samples_.empty() && cycles_.empty()) return;
-  store_->append_results(run_id_, samples_, cycles_);
+  write(nullptr);
+}
+
+void RunWriter::flush_with_checkpoint(const RunCheckpoint& checkpoint) {
+  last_flush_ = std::chrono::steady_clock::now();
+  write(&checkpoint);
+}
+
+void RunWriter::write(const RunCheckpoint* checkpoint) {
+  store_->append_results(run_id_, samples_, cycles_, checkpoint);
   samples_.clear();
   cycles_.clear();
 }

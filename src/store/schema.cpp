@@ -412,9 +412,29 @@ CREATE TABLE study_tasks (
 ) STRICT, WITHOUT ROWID;
 )sql";
 
-constexpr std::array<std::string_view, 9> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
-                                              v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused,
-                                              v7_run_snapshots,       v8_studies,        v9_study_jobs};
+/// Checkpoints and resume (docs/checkpoints.md): the process that runs a run (its lease,
+/// so that a run whose process is gone reads as dead, not running), and each run's latest
+/// checkpoint, written in one transaction with the samples and cycles recorded up to it.
+constexpr std::string_view v10_run_checkpoints = R"sql(
+ALTER TABLE runs ADD COLUMN lease_host TEXT;      -- while running: the host,
+ALTER TABLE runs ADD COLUMN lease_pid INTEGER;    -- process id
+ALTER TABLE runs ADD COLUMN lease_start INTEGER;  -- and start time (clock ticks after boot) of its process
+
+CREATE TABLE run_checkpoints (
+  run_id          INTEGER PRIMARY KEY REFERENCES runs (run_id) ON DELETE CASCADE,
+  t_s             REAL NOT NULL,                       -- simulated time of the state saved
+  samples         INTEGER NOT NULL CHECK (samples >= 0),  -- samples and cycles the run had recorded then
+  cycles          INTEGER NOT NULL CHECK (cycles >= 0),
+  pdamp_version   TEXT NOT NULL,                       -- the pdamp that wrote it (and may resume it)
+  schema_version  INTEGER NOT NULL,                    -- the store's schema then
+  written_at      TEXT NOT NULL,                       -- ISO 8601, UTC
+  state           BLOB NOT NULL                        -- the run loop's and the engine's state (docs/checkpoints.md)
+) STRICT;
+)sql";
+
+constexpr std::array<std::string_view, 10> all{
+    v1_runs_samples_cycles,  v2_run_statistics, v3_initial_states, v4_comparisons, v5_solid_fraction,
+    v6_run_ids_never_reused, v7_run_snapshots,  v8_studies,        v9_study_jobs,  v10_run_checkpoints};
 
 }  // namespace
 

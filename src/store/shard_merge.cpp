@@ -13,10 +13,10 @@ namespace pdamp {
 namespace {
 
 /// The tables of a run's own rows, keyed by run_id and copied as they are.
-constexpr std::array<std::string_view, 5> run_tables{"samples", "cycles", "run_statistics", "calibrations",
-                                                     "run_snapshots"};
+constexpr std::array<std::string_view, 6> run_tables{"samples",      "cycles",        "run_statistics",
+                                                     "calibrations", "run_snapshots", "run_checkpoints"};
 
-constexpr std::array<std::string_view, 15> merged{"initial_states",
+constexpr std::array<std::string_view, 16> merged{"initial_states",
                                                   "initial_particles",
                                                   "runs",
                                                   "samples",
@@ -24,6 +24,7 @@ constexpr std::array<std::string_view, 15> merged{"initial_states",
                                                   "run_statistics",
                                                   "calibrations",
                                                   "run_snapshots",
+                                                  "run_checkpoints",
                                                   "comparisons",
                                                   "comparison_psi_bins",
                                                   "comparison_energy",

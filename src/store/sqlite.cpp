@@ -145,6 +145,11 @@ Statement& Statement::bind(int index, std::string_view value) {
   return *this;
 }
 
+Statement& Statement::bind(int index, std::span<const std::byte> blob) {
+  check_bind(sqlite3_bind_blob64(stmt_, index, blob.data(), blob.size(), SQLITE_TRANSIENT));
+  return *this;
+}
+
 Statement& Statement::bind(int index, std::optional<double> value) {
   return value ? bind(index, *value) : bind_null(index);
 }
@@ -196,6 +201,11 @@ std::string Statement::column_text(int column) const {
   return text ? std::string(reinterpret_cast<const char*>(text),
                             static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column)))
               : std::string();
+}
+
+std::vector<std::byte> Statement::column_blob(int column) const {
+  const auto* first = static_cast<const std::byte*>(sqlite3_column_blob(stmt_, column));
+  return first ? std::vector<std::byte>(first, first + sqlite3_column_bytes(stmt_, column)) : std::vector<std::byte>();
 }
 
 std::optional<double> Statement::column_optional_double(int column) const {

@@ -8,7 +8,7 @@
 #include "pdamp/errors.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/stored_run.hpp"
-#include "pdamp/study/lease.hpp"
+#include "pdamp/store/process_lease.hpp"
 
 namespace pdamp::study {
 namespace {

@@ -15,8 +15,8 @@
 #include <sstream>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/study_store.hpp"
-#include "pdamp/study/lease.hpp"
 #include "pdamp/study/point_runner.hpp"
 
 namespace pdamp::study {

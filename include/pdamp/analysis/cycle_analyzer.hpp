@@ -12,6 +12,7 @@
 
 #include <optional>
 
+#include "pdamp/model/checkpoint.hpp"
 #include "pdamp/model/state.hpp"
 
 namespace pdamp {
@@ -39,7 +40,13 @@ class CycleAnalyzer {
   /// Feed observations in time order; returns the cycle that this one completes, if any.
   std::optional<CycleRecord> feed(const Observation& now);
 
+  /// Where the analysis stands, verbatim (sim/run_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   struct Crest {
     double t_s;
     double z_m;

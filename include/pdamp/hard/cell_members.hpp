@@ -16,6 +16,8 @@
 #include <span>
 #include <vector>
 
+#include "pdamp/model/checkpoint.hpp"
+
 namespace pdamp::hard {
 
 class CellMembers {
@@ -119,7 +121,13 @@ class CellMembers {
     return count;
   }
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   static constexpr int none = -1;
   struct alignas(16) Cell {
     std::array<int, inline_capacity> members{};

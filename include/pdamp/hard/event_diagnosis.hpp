@@ -42,6 +42,9 @@ class EventDiagnosis {
   static constexpr std::size_t speed_bins = 6;
 
   explicit EventDiagnosis(const Scenario& scenario);
+  /// With the soft law's stiffness of sphere pairs and of walls (N/m^1.5).
+  EventDiagnosis(double sphere_kn_N_m1_5, double wall_kn_N_m1_5)
+      : sphere_kn_N_m1_5_(sphere_kn_N_m1_5), wall_kn_N_m1_5_(wall_kn_N_m1_5) {}
 
   /// A collision of `kind` at t_s approaching at `approach_m_s`, of a sphere that last
   /// collided at `previous_s` (−never: not yet) with a partner of effective mass
@@ -58,7 +61,13 @@ class EventDiagnosis {
   /// The decade of an approach speed.
   static std::size_t speed_bin_of(double approach_m_s);
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   struct Counts {
     std::array<std::int64_t, interval_count> intervals{};  ///< per sphere involved
     std::array<std::int64_t, speed_bins> speeds{};         ///< per collision

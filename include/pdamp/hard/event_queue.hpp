@@ -39,6 +39,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "pdamp/model/checkpoint.hpp"
+
 namespace pdamp::hard {
 
 enum class EventKind : std::uint8_t {
@@ -163,7 +165,13 @@ class EventQueue {
     adapt_bucket_width(top.t_s);
   }
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   static constexpr std::int32_t none = -1;
   /// An event in its owner's list: the owner is i (or the host, i = −1).
   struct Stored {

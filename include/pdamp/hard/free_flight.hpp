@@ -143,7 +143,13 @@ class FreeFlight {
   /// outgrow half the L2 cache.
   bool prefetching() const { return prefetch_records_ && prefetch_cells_; }
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   Eigen::Vector3d gravity_m_s2_;
   Cavity cavity_;
   PackedParticles particles_;

@@ -49,6 +49,12 @@ class HardEngine final : public Engine {
   double time_step_s() const override { return 0.0; }
   EngineStatistics statistics() const override;
   std::vector<std::string> warnings() const override;
+  /// Everything the event loop reads: the spheres with their own clocks, the event queue's
+  /// content and calendar as they stand (the order of ties is the queue's), the host's
+  /// trajectory, tiers, riders and bed, the jams, the books and counters
+  /// (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const override;
+  void restore(CheckpointReader& in) override;
 
   /// The deepest overlap now between two spheres or a sphere and a wall (m, 0 if none).
   double max_overlap_m() const;
@@ -65,6 +71,8 @@ class HardEngine final : public Engine {
   void diagnose_events(const Scenario& scenario) { diagnosis_ = std::make_unique<EventDiagnosis>(scenario); }
 
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   /// Lab-frame position of any sphere now (free or riding).
   Eigen::Vector3d position_now(int i, const HostState& host) const;
   /// The law of a collision of i with j (−1 for a wall or rider; `rider`, the rider) at

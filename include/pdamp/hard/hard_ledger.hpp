@@ -86,7 +86,13 @@ class HardLedger {
   /// the last booking).
   void write_to(Observation& o, const HostTrajectory& trajectory, double t_s, const Riders& riders) const;
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   /// Adds what the host did on `trajectory` from the last booking to t_s.
   void add_host_since_booked(double& viscous_sum_J, double& excitation_sum_J, HostLoadBooks& load_sums,
                              const HostTrajectory& trajectory, double t_s, const Riders& riders) const;

@@ -152,7 +152,13 @@ class HostCoupling {
   /// The innermost tier free sphere i is in (0 near, 1 imminent, 2 close, 3 touching), −1 if far.
   int tier_of(int i) const;
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   /// Spheres whose host-dependent events are lower bounds, valid while the host strays
   /// less than `margin_m` from the trajectory they were computed with.
   struct MarginTier {

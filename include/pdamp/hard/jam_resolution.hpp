@@ -64,7 +64,13 @@ class JamResolver {
   VerticalSticking stick_to_host(const Cluster& cluster, const HostState& host, bool prescribed, double carried_mass_kg,
                                  PackedParticles& particles, HardLedger& ledger) const;
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   /// note_collision's record of one collision in the spheres' counts, partners and holds.
   bool record_collision(int i, int j, std::uint8_t hold);
 

@@ -59,7 +59,13 @@ class PackedParticles {
   double moment_of_inertia(Eigen::Index i) const { return 0.4 * mass_kg[i] * radius_m[i] * radius_m[i]; }
   const FlightRecord& record(int i) const { return records_[static_cast<std::size_t>(i)]; }
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   std::vector<FlightRecord> records_;
 
  public:

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "pdamp/model/checkpoint.hpp"
+
 namespace pdamp::hard {
 
 class ParticleSet {
@@ -38,7 +40,13 @@ class ParticleSet {
     sweeping_.clear();
   }
 
+  /// Its state verbatim (hard_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   enum : std::uint8_t { absent, member, erased };
   std::vector<std::uint8_t> state_;
   std::vector<int> list_;

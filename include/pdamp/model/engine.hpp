@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/model/checkpoint.hpp"
 #include "pdamp/model/state.hpp"
 
 namespace pdamp {
@@ -37,6 +38,15 @@ class Engine {
   /// Things the user should know about the run (e.g. contacts overlapping more than the
   /// model is good for); printed on stderr and kept in the run's message.
   virtual std::vector<std::string> warnings() const { return {}; }
+
+  /// Writes the engine's complete state verbatim (docs/checkpoints.md): everything
+  /// advance_to reads, so that an engine restored from it continues with the same bits.
+  /// Const: saving never changes the run.
+  virtual void save(CheckpointWriter& out) const = 0;
+  /// Takes the state `save` wrote, into an engine built for the same run (the same
+  /// scenario, bed and settings: make_engine's arguments); restore_engine does both.
+  /// Throws RuntimeFailure if the checkpoint does not fit this engine.
+  virtual void restore(CheckpointReader& in) = 0;
 
   /// The flag advance_to looks at as it goes (every step, or every few thousand events):
   /// once it is true, advance_to throws Interrupted, and the engine's state is not to be

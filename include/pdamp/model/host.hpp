@@ -12,6 +12,7 @@
 #include <array>
 #include <cstddef>
 
+#include "pdamp/model/checkpoint.hpp"
 #include "pdamp/model/energy_ledger.hpp"
 #include "pdamp/model/host_load.hpp"
 #include "pdamp/scenario/scenario.hpp"
@@ -109,10 +110,16 @@ class HostTrajectory {
   };
   Stretch stretch(double from_s, double to_s, double riding_mass_kg, double gravity_z_m_s2) const;
 
+  /// Every number of the trajectory, verbatim (its model is the engine's own).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
   /// ∫ f dt over [from, to] for each of f's N components.
   template <std::size_t N, class Integrand>
   std::array<double, N> integrate(double from_s, double to_s, Integrand f) const;
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
 
   const HostModel* model_;
   double t0_s_;

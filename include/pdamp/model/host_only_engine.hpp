@@ -17,8 +17,13 @@ class HostOnlyEngine final : public Engine {
   State state() const override;
   SphereDissipation dissipation_by_sphere() const override { return {}; }
   double time_step_s() const override { return 0.0; }
+  void save(CheckpointWriter& out) const override { transfer(*this, out); }
+  void restore(CheckpointReader& in) override { transfer(*this, in); }
 
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
+
   HostModel model_;
   HostTrajectory trajectory_;
   double t_s_ = 0.0;

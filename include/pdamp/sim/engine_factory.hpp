@@ -56,4 +56,12 @@ void check_model_can_run(Model model, const Scenario& scenario);
 std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial,
                                     const RestitutionTable* calibration = nullptr, bool diagnose_events = false);
 
+/// The engine of a run restored from its checkpoint: built as make_engine built the run's
+/// (the same arguments), then given the state saved in `checkpoint` (after the run loop's
+/// part, read_run_loop_state), which must then be read to its end. Throws RuntimeFailure
+/// if the checkpoint does not fit the engine.
+std::unique_ptr<Engine> restore_engine(Model model, const Scenario& scenario, const Particles& initial,
+                                       const RestitutionTable* calibration, bool diagnose_events,
+                                       CheckpointReader& checkpoint);
+
 }  // namespace pdamp

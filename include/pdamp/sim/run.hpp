@@ -3,6 +3,7 @@
 /// analysis, records samples and cycles, and stops cleanly when asked.
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -29,6 +30,11 @@ struct RunControl {
   /// Called at every observation, t = 0 included, after it is recorded, with the engine as
   /// it is then (snapshots). An exception ends the run as failed with its message.
   std::function<void(const Engine& engine, const ObservationStep& step)> at_observation;
+  /// Wall time between checkpoints (docs/checkpoints.md; 0: none). At the first
+  /// observation on the grid after each interval, at a stop request and at the end, the
+  /// run loop saves its own state and the engine's and hands them to the recorder with
+  /// the results so far.
+  std::chrono::nanoseconds checkpoint_interval{0};
 };
 
 /// How the run ended, as the store keeps it, and what it recorded.
@@ -37,10 +43,25 @@ struct RunOutcome : RunEnd {
   int cycles = 0;
 };
 
+/// Where the run loop stood at a checkpoint: the observation's place on the grid (step
+/// `step` of sample interval `interval`: step 0 is the sample at its start), what it had
+/// recorded and its cycle analysis.
+struct RunLoopState {
+  std::int64_t interval = 0, step = 0;
+  RunOutcome outcome;  ///< so far; its wall time that of every process that ran it
+  CycleAnalyzer cycles;
+};
+
 /// Runs `engine` from its current time to scenario.run.duration_s. An exception inside
-/// the engine ends the run as failed with its message; what was recorded stays.
+/// the engine ends the run as failed with its message; what was recorded stays. With
+/// `resume`, the engine is one restored from a checkpoint (restore_engine) and the loop
+/// continues from where that checkpoint left it, recording what follows.
 RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
-                          const RunControl& control = {});
+                          const RunControl& control = {}, const RunLoopState* resume = nullptr);
+
+/// The run loop's part of a checkpoint, which comes first: a checkpoint is read back by
+/// read_run_loop_state, then restore_engine.
+RunLoopState read_run_loop_state(CheckpointReader& in);
 
 /// How often the run loop observes the engine (s): ≥ 256 times per natural period of
 /// the host (or of the excitation, if faster), and at every sample.

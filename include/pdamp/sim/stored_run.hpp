@@ -56,4 +56,13 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
                         const std::function<void(const std::string&)>& warn = {},
                         const std::function<void(std::int64_t run_id)>& started = {});
 
+/// Continues a stored run from its checkpoint (pdamp resume, docs/checkpoints.md) to its
+/// end, or on to `until_s` (then the run's end and scenario say so), as run_and_store runs
+/// one: the samples and cycles it had recorded after the checkpoint are dropped, and
+/// what follows is recorded with the same bits as if the run had never stopped. Throws,
+/// changing nothing, InputError for a run that cannot be resumed (RunStore::resumable_run)
+/// and RuntimeFailure for a checkpoint that does not fit its engine.
+StoredRun resume_and_store(RunStore& store, std::int64_t run_id, std::optional<double> until_s,
+                           const RunControl& control, const std::function<void(const std::string&)>& warn = {});
+
 }  // namespace pdamp

@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "pdamp/model/checkpoint.hpp"
 #include "pdamp/soft/contact_law.hpp"
 #include "pdamp/soft/sphere_arrays.hpp"
 
@@ -46,6 +47,10 @@ class ContactTable {
     entries_ = std::vector<ContactHistory<>>(1);
     free_ = std::vector<int>();
   }
+  /// Its entries and free list verbatim (soft_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
   /// Appends an entry; returns its index.
   int append(const ContactHistory<>& history) {
     push_back_compactly(entries_, history);
@@ -53,6 +58,9 @@ class ContactTable {
   }
 
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
+
   std::vector<ContactHistory<>> entries_;
   std::vector<int> free_;
 };

@@ -67,7 +67,13 @@ class NeighbourList {
   const int* contacts() const { return contact_.data(); }
   long long rebuilds() const { return rebuilds_; }
 
+  /// The pairs, their contacts and the cells' spheres as they stand (soft_checkpoint.cpp).
+  void save(CheckpointWriter& out) const { transfer(*this, out); }
+  void restore(CheckpointReader& in) { transfer(*this, in); }
+
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   int rank(int ix, int iy, int iz) const { return (iy * grid_.nz() + iz) * grid_.nx() + ix; }
   int rank_of(double x, double y, double z) const;
   /// Appends to out[count...] the spheres j of [begin, end) within reach of sphere i.

@@ -47,12 +47,19 @@ class SoftEngine final : public Engine {
   double time_step_s() const override { return dt_s_; }
   EngineStatistics statistics() const override;
   std::vector<std::string> warnings() const override;
+  /// Everything a step reads: the spheres in their current order, the neighbour list and
+  /// the contact tables with their tangential histories as they stand, the host, the
+  /// books and counters (soft_checkpoint.cpp). Any thread count and SIMD path may resume.
+  void save(CheckpointWriter& out) const override;
+  void restore(CheckpointReader& in) override;
 
   /// Kinetic energy of the particles, translational plus rotational (J).
   double particle_kinetic_J() const;
   SimdPath simd_path() const { return simd_path_; }
 
  private:
+  template <class Self, class Archive>
+  static void transfer(Self& self, Archive& archive);
   /// The particles' energies, each summed sphere by sphere (observe, particle_kinetic_J).
   ParticleEnergySums particle_energies() const;
   // The phases of a velocity-Verlet step (advance_to strings them together).

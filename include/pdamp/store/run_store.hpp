@@ -16,6 +16,7 @@
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
 #include "pdamp/model/restitution.hpp"
+#include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/sqlite.hpp"
 
 namespace pdamp {
@@ -62,10 +63,12 @@ struct RunEnd {
   double energy_balance_rel_err = 0.0;  ///< the largest over the run
 };
 
-/// One row of the `run_summary` view.
+/// One row of the `run_summary` view. `status` is the stored one, except that a `running`
+/// run whose process is gone (its lease, on this host) is `dead`.
 struct RunSummary {
   std::int64_t run_id = 0;
   std::string model, scenario_name, status, message, started_at;
+  std::optional<ProcessLease> lease;  ///< of a running run
   int n_particles = 0;
   double duration_s = 0.0, sim_time_s = 0.0;
   std::optional<double> wall_time_s, energy_balance_rel_err;
@@ -134,6 +137,24 @@ struct RunResults {
   double wall_time_s = 0.0;           ///< 0 for a run that never ended
 };
 
+/// A run's latest checkpoint as the store keeps it (run_checkpoints).
+struct StoredCheckpoint {
+  RunCheckpoint checkpoint;
+  std::string pdamp_version;
+  int schema_version = 0;
+};
+
+/// What resuming a run starts from: the run as stored and its latest checkpoint.
+struct ResumableRun {
+  std::int64_t run_id = 0;
+  std::string model, scenario_text;
+  RunStatus status = RunStatus::interrupted;  ///< `running` for a dead run
+  std::optional<ProcessLease> lease;          ///< a dead run's
+  double duration_s = 0.0;                    ///< the run's end
+  std::optional<std::int64_t> initial_state_id;
+  RunCheckpoint checkpoint;
+};
+
 /// `read` (the reading commands): the file must be a pdamp store, and is not written
 /// (only migrated if its schema is older). `modify`: the file must be a pdamp store.
 /// `write`: the file may also be missing or empty, and becomes a store.
@@ -169,8 +190,10 @@ class RunStore {
   /// The run's row, `running`, created before any work so that whatever ends it is stored.
   std::int64_t begin_run(const NewRun& run);
   void start_run(std::int64_t run_id, const RunStart& start);
-  /// Appends samples and cycles of a run in one transaction.
-  void append_results(std::int64_t run_id, std::span<const SampleRecord> samples, std::span<const CycleRecord> cycles);
+  /// Appends samples and cycles of a run in one transaction, with the run's checkpoint if
+  /// given (replacing its last: a run keeps only its latest).
+  void append_results(std::int64_t run_id, std::span<const SampleRecord> samples, std::span<const CycleRecord> cycles,
+                      const RunCheckpoint* checkpoint = nullptr);
   void finish_run(std::int64_t run_id, const RunEnd& end);
   /// The restitution table a hard run used.
   void save_calibration(std::int64_t run_id, const RestitutionTable& table);
@@ -188,6 +211,19 @@ class RunStore {
   std::int64_t save_comparison(const ComparisonRecord& comparison);
   /// A run's samples and cycles; throws InputError for a run not in the store.
   RunResults results(std::int64_t run_id);
+
+  /// A run's latest checkpoint; empty for a run without one.
+  std::optional<StoredCheckpoint> checkpoint(std::int64_t run_id);
+  /// The run to resume from its checkpoint, to `until_s` if given. Throws InputError
+  /// naming why it cannot be: not in the store, live in a process (its lease), failed,
+  /// completed without `until_s`, `until_s` not beyond its end, no checkpoint, a
+  /// checkpoint of another pdamp version or store schema (run_checkpoints.cpp).
+  ResumableRun resumable_run(std::int64_t run_id, std::optional<double> until_s);
+  /// Takes the run over for this process (its lease) as `running` again, to end at
+  /// `duration_s` with `scenario_text`, and drops the samples and cycles recorded after its
+  /// checkpoint: all in one transaction. Throws InputError if another process took it
+  /// over since resumable_run read it.
+  void claim_for_resume(const ResumableRun& run, double duration_s, const std::string& scenario_text);
 
   /// Records (or updates) where a run's snapshots are.
   void save_snapshots(std::int64_t run_id, const SnapshotRecord& snapshots);
@@ -215,6 +251,8 @@ class RunStore {
 
  private:
   void migrate();
+  /// Replaces the run's checkpoint (within a transaction).
+  void replace_checkpoint(std::int64_t run_id, const RunCheckpoint& checkpoint);
   std::unique_ptr<sqlite::Database> db_;
 };
 
@@ -231,9 +269,11 @@ class RunWriter final : public RunRecorder {
   void record_sample(const Observation& sample, double energy_balance_rel_err) override;
   void record_cycle(const CycleRecord& cycle) override;
   void flush() override;
+  void flush_with_checkpoint(const RunCheckpoint& checkpoint) override;
 
  private:
   void flush_if_due();
+  void write(const RunCheckpoint* checkpoint);
 
   RunStore* store_;
   std::int64_t run_id_;

@@ -7,13 +7,16 @@
 /// writing one store each open their own.
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <random>
+#include <span>
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 
 #include "pdamp/errors.hpp"
 
@@ -99,6 +102,7 @@ class Statement {
   Statement& bind(int index, std::string_view value);
   Statement& bind(int index, std::optional<double> value);
   Statement& bind(int index, std::optional<std::int64_t> value);
+  Statement& bind(int index, std::span<const std::byte> blob);
   Statement& bind_null(int index);
   /// Binds the value in `column` of another statement's current row as it is: its type and
   /// bits (a row copied between stores).
@@ -116,6 +120,7 @@ class Statement {
   std::int64_t column_int(int column) const;
   std::string column_text(int column) const;
   std::optional<double> column_optional_double(int column) const;
+  std::vector<std::byte> column_blob(int column) const;
   int column_count() const;
   /// Whether `column` holds the same type and bits as `other_column` of another statement's
   /// row (a REAL compared bit for bit: -0.0 differs from 0.0).

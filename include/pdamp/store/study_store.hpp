@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/run_store.hpp"
 
 namespace pdamp {
@@ -20,14 +21,6 @@ namespace pdamp {
 enum class PointStatus { pending, running, completed, failed, interrupted };
 std::string_view to_string(PointStatus status);
 PointStatus parse_point_status(std::string_view text);
-
-/// The process that runs a point: its host, id and start time (which tells a live process
-/// from a later one that reuses the id).
-struct ProcessLease {
-  std::string host;
-  std::int64_t pid = 0;
-  std::int64_t start_ticks = 0;
-};
 
 struct NewStudy {
   std::string name, models, study_file, study_text, scenario_file, scenario_text;

@@ -1,4 +1,4 @@
-#include "pdamp/study/lease.hpp"
+#include "pdamp/store/process_lease.hpp"
 
 #include <unistd.h>
 
@@ -7,14 +7,15 @@
 #include <optional>
 #include <sstream>
 
-namespace pdamp::study {
-namespace {
+namespace pdamp {
 
-std::string host_name() {
+std::string this_host_name() {
   char name[HOST_NAME_MAX + 1] = {};
   if (gethostname(name, sizeof name - 1) != 0) return "unknown";
   return name;
 }
+
+namespace {
 
 struct ProcessStat {
   char state = '?';
@@ -44,13 +45,13 @@ std::optional<ProcessStat> read_stat(std::int64_t pid) {
 ProcessLease this_process_lease() {
   const auto pid = static_cast<std::int64_t>(getpid());
   const auto stat = read_stat(pid);
-  return {host_name(), pid, stat ? stat->start_ticks : 0};
+  return {this_host_name(), pid, stat ? stat->start_ticks : 0};
 }
 
 bool lease_is_alive(const ProcessLease& lease) {
-  if (lease.host != host_name()) return true;
+  if (lease.host != this_host_name()) return true;
   const auto stat = read_stat(lease.pid);
   return stat && stat->state != 'Z' && stat->state != 'X' && stat->start_ticks == lease.start_ticks;
 }
 
-}  // namespace pdamp::study
+}  // namespace pdamp

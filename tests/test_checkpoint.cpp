@@ -1,0 +1,272 @@
+/// Checkpoints and resume (docs/checkpoints.md): an engine restored from a checkpoint, and
+/// a run resumed from one, continue with the same bits as if they had never stopped, on
+/// both engines; saving changes nothing; the store keeps a run's latest checkpoint with the
+/// results up to it; `pdamp resume` refuses what it cannot continue, and continues runs
+/// killed at random moments to the same rows as an uninterrupted run.
+#include <doctest/doctest.h>
+#include <omp.h>
+
+#include <cstring>
+#include <random>
+
+#include "engine_models.hpp"
+#include "pdamp/model/placement.hpp"
+#include "pdamp/sim/run.hpp"
+#include "pdamp/sim/stored_run.hpp"
+#include "pdamp/soft/soft_engine.hpp"
+#include "pdamp/store/run_store.hpp"
+#include "test_process.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using test::HardModel;
+using test::SoftModel;
+
+namespace {
+
+Particles placed(const Scenario& s) { return place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m); }
+
+/// Samples, cycles and checkpoints kept in memory.
+struct MemoryRecorder final : RunRecorder {
+  std::vector<SampleRecord> samples;
+  std::vector<CycleRecord> cycles;
+  std::vector<RunCheckpoint> checkpoints;
+  void record_sample(const Observation& o, double error) override { samples.push_back({o, error}); }
+  void record_cycle(const CycleRecord& c) override { cycles.push_back(c); }
+  void flush() override {}
+  void flush_with_checkpoint(const RunCheckpoint& c) override { checkpoints.push_back(c); }
+};
+
+/// Bit for bit: the records are plain numbers (the cycle's optional Γ set or not alike).
+template <class Record>
+bool same_bits(const std::vector<Record>& a, const std::vector<Record>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    if constexpr (std::is_same_v<Record, SampleRecord>) {
+      const Observation &x = a[k].observation, &y = b[k].observation;
+      if (std::memcmp(&x, &y, sizeof x) != 0 ||
+          std::memcmp(&a[k].energy_balance_rel_err, &b[k].energy_balance_rel_err, sizeof(double)) != 0)
+        return false;
+    } else {
+      if (std::memcmp(&a[k], &b[k], sizeof(Record)) != 0) return false;
+    }
+  }
+  return true;
+}
+
+const ScenarioOverrides short_run{"run.duration_s=0.1"};
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("a run resumed from any of its checkpoints gives the same bits as the run never stopped", M,
+                   SoftModel, HardModel) {
+  for (const auto& mode : test::excitation_modes()) {
+    CAPTURE(mode.empty() ? std::string("free") : mode[0]);
+    ScenarioOverrides overrides = mode;
+    overrides.push_back("run.duration_s=0.0997731");  // the last step ends off the observation grid
+    const Scenario s = load_scenario(test::scenario_file("small"), overrides);
+    const Particles bed = placed(s);
+    // Uninterrupted without checkpoints, and with one at every observation it can.
+    MemoryRecorder plain, saved;
+    auto plain_engine = make_engine(M::model, s, bed);
+    REQUIRE(run_simulation(*plain_engine, s, plain).status == RunStatus::completed);
+    RunControl every_observation;
+    every_observation.checkpoint_interval = std::chrono::nanoseconds(1);
+    auto saved_engine = make_engine(M::model, s, bed);
+    REQUIRE(run_simulation(*saved_engine, s, saved, every_observation).status == RunStatus::completed);
+    CHECK(same_bits(plain.samples, saved.samples));  // saving never perturbs the run
+    CHECK(same_bits(plain.cycles, saved.cycles));
+    REQUIRE(saved.checkpoints.size() >= 20);
+    CHECK(saved.checkpoints.back().t_s < s.run.duration_s);  // the state before the step off the grid
+
+    for (const std::size_t k : {std::size_t{0}, saved.checkpoints.size() / 3, saved.checkpoints.size() - 1}) {
+      const RunCheckpoint& c = saved.checkpoints[k];
+      CAPTURE(c.t_s);
+      MemoryRecorder resumed;
+      resumed.samples.assign(plain.samples.begin(), plain.samples.begin() + c.samples);
+      resumed.cycles.assign(plain.cycles.begin(), plain.cycles.begin() + c.cycles);
+      CheckpointReader in(c.state);
+      const RunLoopState loop = read_run_loop_state(in);
+      const auto engine = restore_engine(M::model, s, bed, nullptr, false, in);
+      const RunOutcome outcome = run_simulation(*engine, s, resumed, {}, &loop);
+      CHECK(outcome.status == RunStatus::completed);
+      CHECK(outcome.samples == static_cast<int>(plain.samples.size()));
+      CHECK(same_bits(plain.samples, resumed.samples));
+      CHECK(same_bits(plain.cycles, resumed.cycles));
+      CHECK(engine->statistics() == plain_engine->statistics());
+      test::check_same_state(engine->state(), plain_engine->state());
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("an engine restored on two threads continues one saved on one with the same bits", M, SoftModel,
+                   HardModel) {
+  // 3,200 spheres: enough for the soft engine to share its passes among threads.
+  const Scenario s = test::scenario_from(
+      "[cavity]\ndiameter_m = 0.03\nheight_m = 0.03\n[particles]\ncount = 3200\ndiameter_m = 0.001\n");
+  const Particles bed = placed(s);
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const auto original = make_engine(M::model, s, bed);
+  original->advance_to(0.0005);
+  CheckpointWriter out(RunStore::schema_version());
+  original->save(out);
+  const std::vector<std::byte> blob = out.finish();
+  original->advance_to(0.001);
+  omp_set_num_threads(2);
+  CheckpointReader in(blob);
+  const auto restored = restore_engine(M::model, s, bed, nullptr, false, in);
+  restored->advance_to(0.001);
+  if (M::model == Model::soft) CHECK(test::statistic(*restored, "threads_used") == 2);
+  omp_set_num_threads(before);
+  test::check_same_state(original->state(), restored->state());
+  CHECK(original->statistics() == restored->statistics());
+}
+
+TEST_CASE("a checkpoint that is damaged, of another format or of another engine is refused") {
+  const Scenario s = load_scenario(test::scenario_file("small"), short_run);
+  const auto soft = make_engine(Model::soft, s, placed(s));
+  CheckpointWriter out(RunStore::schema_version());
+  soft->save(out);
+  std::vector<std::byte> blob = out.finish();
+  {
+    CheckpointReader in(blob);
+    CHECK_THROWS_WITH_AS(restore_engine(Model::hard, s, placed(s), nullptr, false, in),
+                         doctest::Contains("the checkpoint does not fit this engine"), RuntimeFailure);
+  }
+  blob[blob.size() / 2] ^= std::byte{1};
+  CHECK_THROWS_WITH_AS(CheckpointReader{blob}, doctest::Contains("its checksum does not match"), InputError);
+  blob.assign(4, std::byte{0});
+  CHECK_THROWS_WITH_AS(CheckpointReader{blob}, doctest::Contains("not one pdamp wrote"), InputError);
+}
+
+namespace {
+
+using test::pdamp_cli;
+using test::Process;
+using test::Result;
+
+std::string small() { return test::scenario_file("small").string(); }
+
+/// The rows of two runs that differ (samples and cycles, every column but the run's id).
+std::int64_t differing_rows(const std::filesystem::path& db, std::int64_t a, std::int64_t b) {
+  std::int64_t differ = 0;
+  for (const std::string table : {"samples", "cycles"}) {
+    std::string columns;
+    sqlite::Database d(db);
+    sqlite::Statement names(d, "SELECT name FROM pragma_table_info(?) WHERE name != 'run_id' ORDER BY cid");
+    names.bind(1, table);
+    while (names.step()) columns += (columns.empty() ? "" : ", ") + names.column_text(0);
+    for (const auto& [x, y] : {std::pair{a, b}, std::pair{b, a}}) {
+      differ += test::count_rows(db, "SELECT count(*) FROM (SELECT " + columns + " FROM " + table +
+                                         " WHERE run_id = " + std::to_string(x) + " EXCEPT SELECT " + columns +
+                                         " FROM " + table + " WHERE run_id = " + std::to_string(y) + ")");
+    }
+  }
+  return differ;
+}
+
+}  // namespace
+
+TEST_CASE("pdamp resume: runs killed by SIGKILL at random moments, several times, end as the run never stopped") {
+  std::random_device seed_source;
+  const unsigned seed = seed_source();
+  INFO("kill times drawn with seed " << seed);
+  std::mt19937 rng(seed);
+  for (const std::string model : {"soft", "hard"})
+    [&] {
+      CAPTURE(model);
+      test::TempDir dir("checkpoint-kill-" + model);
+      const auto db = dir / "runs.sqlite";
+      const std::string duration = model == "soft" ? "0.5" : "1.5";  // about a second of wall time each
+      const std::vector<std::string> run{"run",       "--scenario",         small(),  "--model",
+                                         model,       "--duration",         duration, "--db",
+                                         db.string(), "--checkpoint-every", "0.05"};
+      REQUIRE(pdamp_cli(run, dir).code == 0);  // run 1, uninterrupted
+      RunStore store(db, StoreAccess::read);
+      const std::int64_t reference_wall_ms = std::llround(1000 * store.summary(1)->wall_time_s.value());
+      std::uniform_int_distribution<std::int64_t> moment(50, std::max<std::int64_t>(100, reference_wall_ms));
+      Process first(run, dir);
+      std::this_thread::sleep_for(std::chrono::milliseconds(moment(rng)));
+      first.signal(SIGKILL);
+      first.wait();
+      int kills = 1;
+      for (;;) {
+        const auto s = store.summary(2);
+        if (!s) {
+          MESSAGE("killed before its run began");
+          return;
+        }
+        if (s->status == "completed") break;
+        CHECK(s->status == "dead");
+        const Result runs = pdamp_cli({"runs", "--db", db.string()}, dir);
+        CHECK(runs.out.find(" dead ") != std::string::npos);
+        if (!store.checkpoint(2)) {  // killed before its first checkpoint: nothing to resume
+          const Result refused = pdamp_cli({"resume", "2", "--db", db.string()}, dir);
+          CHECK(refused.code == 2);
+          CHECK(refused.err.find("has no checkpoint") != std::string::npos);
+          return;
+        }
+        Process resume({"resume", "2", "--db", db.string(), "--checkpoint-every", "0.05"}, dir);
+        if (kills < 3) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(moment(rng)));
+          resume.signal(SIGKILL);
+          ++kills;
+        }
+        resume.wait();
+      }
+      CHECK(differing_rows(db, 1, 2) == 0);
+      CHECK(store.summary(2)->n_samples == store.summary(1)->n_samples);
+      CHECK(store.statistics(2).size() == store.statistics(1).size());
+    }();
+}
+
+TEST_CASE("pdamp resume --until extends a completed run to what a longer run gives; refusals exit 2 with the reason") {
+  test::TempDir dir("checkpoint-until");
+  const auto db = dir / "runs.sqlite";
+  auto run = [&](const std::string& duration, const std::string& every) {
+    return pdamp_cli({"run", "--scenario", small(), "--model", "hard", "--duration", duration, "--db", db.string(),
+                      "--checkpoint-every", every},
+                     dir);
+  };
+  REQUIRE(run("0.1995", "60").code == 0);  // run 1: its last step off the grid
+  REQUIRE(run("0.3", "0").code == 0);      // run 2: the longer run, without checkpoints
+  auto resume = [&](const std::vector<std::string>& more) {
+    std::vector<std::string> args{"resume", "--db", db.string()};
+    args.insert(args.end(), more.begin(), more.end());
+    return pdamp_cli(args, dir);
+  };
+  auto refused = [&](const std::vector<std::string>& args, const std::string& why) {
+    CAPTURE(why);
+    const Result r = resume(args);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(why) != std::string::npos);
+  };
+  refused({"1"}, "run 1 is completed (it ran to 0.1995 s); give --until T");
+  refused({"1", "--until", "0.1"}, "--until 0.1 s must be beyond the end of run 1 (0.1995 s)");
+  refused({"2", "--until", "0.5"}, "run 2 has no checkpoint");
+  refused({"9", "--until", "0.5"}, "run 9 is not in");
+  refused({"1", "--until", "-1"}, "--until '-1': must be a number of seconds above 0");
+  REQUIRE(resume({"1", "--until", "0.3"}).code == 0);
+  CHECK(differing_rows(db, 1, 2) == 0);
+  RunStore store(db);
+  CHECK(store.summary(1)->duration_s == 0.3);
+  CHECK(store.checkpoint(1)->checkpoint.t_s <= 0.3);
+  CHECK(test::count_rows(db, "SELECT count(*) FROM run_checkpoints") == 1);  // only the latest, of run 1
+
+  // A checkpoint of another pdamp version, and a run live in another process (its lease).
+  sqlite::Database d(db);
+  d.exec("UPDATE run_checkpoints SET pdamp_version = '0.0.1' WHERE run_id = 1");
+  refused({"1", "--until", "0.5"}, "run 1's checkpoint was written by pdamp 0.0.1");
+  const ProcessLease me = this_process_lease();
+  d.exec("UPDATE runs SET status = 'running', lease_host = '" + me.host + "', lease_pid = " + std::to_string(me.pid) +
+         ", lease_start = " + std::to_string(me.start_ticks) + " WHERE run_id = 1");
+  CHECK(store.summary(1)->status == "running");
+  refused({"1"}, "run 1 is live in process " + std::to_string(me.pid));
+  d.exec("UPDATE runs SET lease_host = 'elsewhere' WHERE run_id = 1");
+  CHECK(store.summary(1)->status == "running");  // another host's process cannot be checked from here
+  const Result runs = pdamp_cli({"runs", "--db", db.string()}, dir);
+  CHECK(runs.out.find("running on elsewhere") != std::string::npos);
+  d.exec("UPDATE runs SET lease_host = '" + me.host + "', lease_pid = 4000000000 WHERE run_id = 1");
+  CHECK(store.summary(1)->status == "dead");
+}

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# What checkpoints cost (docs/checkpoints.md): Table 1 on each model with
+# --checkpoint-every 0 (none), 60 (the default: the run's last state, and one a minute)
+# and 1 (one a second, to show what one checkpoint costs), alternated round by round on
+# one core (PDAMP_BENCH_CORE, tools/bench-lib.sh). Prints each run's wall time (the runs
+# table's, the run itself: the bed is settled once beforehand and shared), then per model
+# and setting the median, min and max, the median's change against none, and the
+# checkpoints' size.
+# Usage: tools/bench-checkpoint.sh [--rounds N] [--soft-duration S] [--hard-duration S]
+#   defaults: 5 rounds, soft 0.15 s of Table 1 (a tenth: 1.5 s takes 1.5 min a run), hard 1.5 s
+# PDAMP_BINARY picks the pdamp to time (default build/release/src/pdamp, built first).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+rounds=5
+soft_duration=0.15
+hard_duration=1.5
+while [ $# -gt 0 ]; do
+  case $1 in
+    --rounds) rounds=$2; shift 2 ;;
+    --soft-duration) soft_duration=$2; shift 2 ;;
+    --hard-duration) hard_duration=$2; shift 2 ;;
+    *) echo "tools/bench-checkpoint.sh: unknown option '$1' (valid: --rounds N, --soft-duration S, --hard-duration S)" >&2
+       exit 2 ;;
+  esac
+done
+source "$root/tools/bench-lib.sh"
+if [ -n "${PDAMP_BINARY:-}" ]; then
+  pdamp=$PDAMP_BINARY
+else
+  "$root/tools/build.sh" release >/dev/null
+fi
+db="$root/build/bench/checkpoint.sqlite"
+rm -f "$db"
+table1="$root/data/scenarios/table1.ini"
+pin=(on_bench_core)
+# The shared bed, settled once.
+run --scenario "$table1" --model hard --duration 0.001 --checkpoint-every 0 >/dev/null
+
+results=$(mktemp)
+for round in $(seq "$rounds"); do
+  for model in soft hard; do
+    duration=$soft_duration
+    [ "$model" = hard ] && duration=$hard_duration
+    for every in 0 60 1; do
+      id=$(run --scenario "$table1" --model "$model" --duration "$duration" --checkpoint-every "$every" --threads 1)
+      bytes=$(sqlite3 "$db" "SELECT coalesce(length(state), 0) FROM runs LEFT JOIN run_checkpoints USING (run_id) WHERE run_id = $id")
+      echo "$model $every $round $(wall "$id") $bytes" | tee -a "$results"
+    done
+  done
+done
+echo
+echo "model every_s runs median_s min_s max_s vs_none checkpoint_bytes"
+for model in soft hard; do
+  none=$(awk -v m=$model '$1 == m && $2 == 0 { print $4 }' "$results" | sort -g | awk '{ a[NR] = $1 } END { print (NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2) }')
+  for every in 0 60 1; do
+    awk -v m=$model -v e=$every '$1 == m && $2 == e { print $4, $5 }' "$results" | sort -g |
+      awk -v m=$model -v e=$every -v none="$none" '{ a[NR] = $1; b = $2 } END {
+        med = NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2
+        printf "%s %s %d %.3f %.3f %.3f %+.1f%% %d\n", m, e, NR, med, a[1], a[NR], 100 * (med / none - 1), b }'
+  done
+done
+rm -f "$results"

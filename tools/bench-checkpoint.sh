@@ -49,14 +49,17 @@ for round in $(seq "$rounds"); do
   done
 done
 echo
-echo "model every_s runs median_s min_s max_s vs_none checkpoint_bytes"
+# Each setting against none of the same round (the machine's speed drifts between rounds).
+median_min_max() {  # of the numbers on stdin
+  sort -g | awk '{ a[NR] = $1 } END { printf "%.4f %.4f %.4f", NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2, a[1], a[NR] }'
+}
+echo "model every_s runs wall_median_s wall_min_s wall_max_s ratio_to_none_median ratio_min ratio_max checkpoint_bytes"
 for model in soft hard; do
-  none=$(awk -v m=$model '$1 == m && $2 == 0 { print $4 }' "$results" | sort -g | awk '{ a[NR] = $1 } END { print (NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2) }')
   for every in 0 60 1; do
-    awk -v m=$model -v e=$every '$1 == m && $2 == e { print $4, $5 }' "$results" | sort -g |
-      awk -v m=$model -v e=$every -v none="$none" '{ a[NR] = $1; b = $2 } END {
-        med = NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2
-        printf "%s %s %d %.3f %.3f %.3f %+.1f%% %d\n", m, e, NR, med, a[1], a[NR], 100 * (med / none - 1), b }'
+    paired=$(awk -v m=$model -v e=$every '$1 == m && $2 == 0 { none[$3] = $4 } $1 == m && $2 == e { t[$3] = $4; b = $5 }
+      END { for (r in t) print t[r], t[r] / none[r], b }' "$results")
+    echo "$model $every $(echo "$paired" | wc -l) $(echo "$paired" | cut -d' ' -f1 | median_min_max)" \
+      "$(echo "$paired" | cut -d' ' -f2 | median_min_max) $(echo "$paired" | head -1 | cut -d' ' -f3)"
   done
 done
 rm -f "$results"

@@ -4,30 +4,14 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
-#include <numbers>
 #include <optional>
 #include <sstream>
 
 #include "pdamp/analysis/cycle_analyzer.hpp"
 #include "pdamp/errors.hpp"
-#include "pdamp/model/host.hpp"
 #include "pdamp/sim/run_checkpoint.hpp"
 
 namespace pdamp {
-
-double observation_interval_s(const Scenario& scenario) {
-  double fastest = scenario.excitation.angular_frequency_rad_s();
-  if (!scenario.host_has_infinite_mass()) {
-    fastest = std::max(fastest, HostModel(scenario).natural_angular_frequency_rad_s());
-  }
-  return std::min(scenario.run.sample_interval_s, 2.0 * std::numbers::pi / fastest / 256.0);
-}
-
-ObservationGrid observation_grid(const Scenario& scenario) {
-  const double sample_interval = scenario.run.sample_interval_s;
-  const auto steps = static_cast<long>(std::ceil(sample_interval / observation_interval_s(scenario) - 1e-9));
-  return {steps, sample_interval / static_cast<double>(steps)};
-}
 
 CycleAnalyzer make_cycle_analyzer(const Scenario& scenario, const Particles& bed) {
   const double g_z = scenario.gravity_m_s2.z();

@@ -12,17 +12,10 @@
 #include "pdamp/analysis/cycle_analyzer.hpp"
 #include "pdamp/analysis/recorder.hpp"
 #include "pdamp/model/engine.hpp"
+#include "pdamp/sim/observation_grid.hpp"
 #include "pdamp/store/run_store.hpp"
 
 namespace pdamp {
-
-/// Where an observation falls on the run loop's grid of observation steps (ObservationGrid).
-struct ObservationStep {
-  std::int64_t index = 0;  ///< steps since t = 0: the engine is at index × step_s
-  /// false for the run's last observation if the duration ends between two steps (the
-  /// engine is then at the duration, before step `index`)
-  bool on_grid = true;
-};
 
 struct RunControl {
   const std::atomic<bool>* stop = nullptr;   ///< when it becomes true the run ends as interrupted
@@ -62,19 +55,6 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
 /// The run loop's part of a checkpoint, which comes first: a checkpoint is read back by
 /// read_run_loop_state, then restore_engine.
 RunLoopState read_run_loop_state(CheckpointReader& in);
-
-/// How often the run loop observes the engine (s): ≥ 256 times per natural period of
-/// the host (or of the excitation, if faster), and at every sample.
-double observation_interval_s(const Scenario& scenario);
-
-/// The times the run loop observes the engine: every sample interval Δ split into
-/// `steps_per_sample` steps of `step_s` (≤ observation_interval_s), step j of sample
-/// interval k at k Δ + j step_s, computed so that samples fall exactly on multiples of Δ.
-struct ObservationGrid {
-  long steps_per_sample;
-  double step_s;
-};
-ObservationGrid observation_grid(const Scenario& scenario);
 
 /// The cycle analysis of a run starting from `bed`: it needs the host's equilibrium with
 /// the bed resting in it.

@@ -15,23 +15,6 @@
 
 using namespace pdamp;
 
-namespace {
-
-/// The steady response of M z'' + C z' + K z = F0 sin θ (force) or of the host on a base
-/// y = Y sin θ: amplitude X and phase against the excitation.
-struct ClosedForm {
-  double amplitude_m, phase_rad;
-};
-ClosedForm host_alone(const Scenario& s) {
-  const double k = s.host.stiffness_N_m, c = s.host.damping_N_s_m, m = s.host.mass_kg;
-  const double w = s.excitation.angular_frequency_rad_s();
-  const double dynamic = std::hypot(k - m * w * w, c * w), lag = std::atan2(c * w, k - m * w * w);
-  if (s.excitation.mode == ExcitationMode::force) return {s.excitation.force_N / dynamic, -lag};
-  return {s.excitation.amplitude_m * std::hypot(k, c * w) / dynamic, std::atan2(c * w, k) - lag};
-}
-
-}  // namespace
-
 TEST_CASE_TEMPLATE("the host alone: steady amplitude, phase and loss factor as in closed form, on both engines", M,
                    test::SoftModel, test::HardModel) {
   // Each engine's own host integration, with one sphere floating at rest in weightlessness
@@ -57,7 +40,7 @@ TEST_CASE_TEMPLATE("the host alone: steady amplitude, phase and loss factor as i
           test::scenario_from(base + "[excitation]\n" + drive + "frequency_hz = " + std::to_string(f_hz) + "\n");
       auto engine = make_engine(M::model, s, floating);
       const FrfPointOutcome point = run_frf_point(*engine, s, criterion);
-      const ClosedForm exact = host_alone(s);
+      const test::ClosedForm exact = test::host_alone(s);
       const ResponseMetrics& m = point.metrics;
       REQUIRE(m.settled);
       CHECK(engine->observe().host_load.particles_N_s == 0.0);

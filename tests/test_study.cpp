@@ -138,7 +138,7 @@ TEST_CASE("study files: every mistake is one message naming the line, the key an
             "test.ini, line 5: [sweep] 'particles.cont' is not a scenario key; "
             "did you mean particles.count?"},
            {head + "[sweep]\nwarp.speed = 1, 2\n", "'warp.speed' is not a scenario key (run 'pdamp keys'"},
-           {head + "[sweep]\nscenario.name = a, b\n", "scenario.name cannot be swept"},
+           {head + "[sweep]\nscenario.name = a, b\n", "scenario.name cannot be set by a study"},
            {head + "[sweep]\nhost.z0_m = 1, 2\nhost.z0_m = 3\n", "test.ini, line 6: [sweep] host.z0_m is given twice"},
            {head + "[sweep]\nhost.z0_m = 0.01, 0.02, 1e-2\n", "the value '1e-2' appears twice (values 1 and 3)"},
            {head + "[sweep]\nhost.z0_m = 5:1:3\n", "reversed"},
@@ -151,10 +151,9 @@ TEST_CASE("study files: every mistake is one message naming the line, the key an
            {head + "[sweep]\nzip = host.z0_m host.v0_m_s\nzip = host.z0_m run.duration_s\n",
             "host.z0_m is already in another zip"},
            {head + "[sweep]\n", "test.ini, line 4: [sweep] has no keys"},
-           {head, "no [sweep] section"},
+           {head, "no [sweep] or [frf] section"},
            {head + "[sweeps]\nhost.z0_m = 1\n", "test.ini, line 4: unknown section [sweeps]"},
            {head + "[sweep.]\nhost.z0_m = 1\n", "unknown section [sweep.]"},
-           {head + "[frf]\nlevels = 1\n", "test.ini, line 4: [frf]: frequency-response studies are not yet supported"},
            {head + "[sweep]\nhost.z0_m = 1\n[sweep]\nhost.v0_m_s = 1\n", "[sweep] appears twice (first on line 4)"},
            {"[study]\nmodels = hard\n[sweep]\nhost.z0_m = 1\n", "[study] scenario is missing"},
            {"[study]\nscenario = a.ini\n[sweep]\nhost.z0_m = 1\n", "[study] models is missing (soft, hard or both)"},
@@ -307,8 +306,9 @@ TEST_CASE("the study tables round-trip: points and values, claims and attempts, 
   test::TempDir dir("study-store");
   RunStore store(dir / "runs.sqlite");
   StudyStore studies(store);
-  const std::vector<NewStudyPoint> points{{1, "sweep", {{"particles.count", "10"}, {"particles.diameter_m", "1 2"}}},
-                                          {2, "sweep", {{"particles.count", "20"}, {"particles.diameter_m", "1 2"}}}};
+  const std::vector<NewStudyPoint> points{
+      {1, "sweep", {{"particles.count", "10"}, {"particles.diameter_m", "1 2"}}, std::nullopt},
+      {2, "sweep", {{"particles.count", "20"}, {"particles.diameter_m", "1 2"}}, std::nullopt}};
   const auto id = studies.create_study({"s", "both", "/s.ini", "study text", "/b.ini", "base text"}, points);
   CHECK(studies.find_study("s")->study_id == id);
   CHECK(!studies.find_study("t"));

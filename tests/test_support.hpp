@@ -193,4 +193,17 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+/// The steady response of M z'' + C z' + K z = F0 sin θ (force) or of the host on a base
+/// y = Y sin θ: amplitude X and phase against the excitation.
+struct ClosedForm {
+  double amplitude_m, phase_rad;
+};
+inline ClosedForm host_alone(const Scenario& s) {
+  const double k = s.host.stiffness_N_m, c = s.host.damping_N_s_m, m = s.host.mass_kg;
+  const double w = s.excitation.angular_frequency_rad_s();
+  const double dynamic = std::hypot(k - m * w * w, c * w), lag = std::atan2(c * w, k - m * w * w);
+  if (s.excitation.mode == ExcitationMode::force) return {s.excitation.force_N / dynamic, -lag};
+  return {s.excitation.amplitude_m * std::hypot(k, c * w) / dynamic, std::atan2(c * w, k) - lag};
+}
+
 }  // namespace pdamp::test

@@ -42,7 +42,8 @@ constexpr const char* study_usage =
     "  list [--db FILE]                  the stored studies\n"
     "  show STUDY_ID [--db FILE]         every point of a study: values, status, metrics\n"
     "  plot STUDY_ID [--metric M] [--x KEY] [--out FILE.png] [--db FILE]\n"
-    "          draw a metric against a swept key, one curve per model (python3-matplotlib)\n"
+    "          draw a metric against a swept key, one curve per model (python3-matplotlib); an\n"
+    "          [frf] study: amplitude and phase against frequency, m_app and c_eq against Gamma\n"
     "  run-point STUDY_ID POINT [--threads N] [--db FILE]\n"
     "          run one point of a stored study in this process (what each worker runs)\n"
     "  submit STUDY.ini --slurm [--partition P] [--account A] [--time T] [--max-parallel K]\n"
@@ -56,7 +57,64 @@ constexpr const char* study_usage =
     "          run one task of a job array into its shard store (what the job script runs)\n"
     "\n"
     "A study file names a base scenario, the model(s) and [sweep] sections of scenario keys and\n"
-    "their values; data/studies/table4.ini is an example.\n";
+    "their values (data/studies/table4.ini), or [frf] sections of stepped-sine frequency\n"
+    "responses (data/studies/table1_frf.ini).\n";
+
+/// The point's message and, if its process is gone, how to run it again.
+void point_messages(const StudyPointState& p, std::int64_t id, std::vector<std::string>& messages) {
+  if (!p.message.empty()) messages.push_back("point " + std::to_string(p.point) + ": " + p.message);
+  if (p.lease && !lease_is_alive(*p.lease)) {
+    messages.push_back("point " + std::to_string(p.point) + ": its process (" + std::to_string(p.lease->pid) + " on " +
+                       p.lease->host + ") is gone; 'pdamp study resume " + std::to_string(id) + "' runs it again");
+  }
+}
+
+/// A frequency-response study's points: one line each, on its curve, with its metrics.
+void print_frf_points(StudyStore& studies, std::int64_t id, std::ostream& out) {
+  TextTable table({{"point", true},
+                   {"curve", true},
+                   {"model"},
+                   {"dir"},
+                   {"level", true},
+                   {"f_Hz", true},
+                   {"status"},
+                   {"settled"},
+                   {"cycles", true},
+                   {"X_norm", true},
+                   {"phase_rad", true},
+                   {"Gamma", true},
+                   {"m_app/m_p", true},
+                   {"c_eq_N_s_m", true},
+                   {"eta", true},
+                   {"wall_s", true}});
+  std::vector<std::string> messages;
+  const auto states = studies.points(id);
+  for (const auto& f : studies.frf_points(id)) {
+    std::vector<std::string> row{std::to_string(f.point),
+                                 std::to_string(f.place.curve),
+                                 f.place.model + (f.place.host_alone ? " alone" : ""),
+                                 f.place.direction,
+                                 format_number(f.place.level),
+                                 format_number(f.place.frequency_hz),
+                                 f.status};
+    if (const auto& r = f.result) {
+      const ResponseMetrics& m = r->metrics;
+      const std::optional<double> ratio =
+          r->particle_mass_kg > 0 ? std::optional(m.apparent_mass_kg / r->particle_mass_kg) : std::nullopt;
+      row.insert(row.end(),
+                 {m.settled ? "yes" : "no", std::to_string(r->cycles_run), format_number(m.normalised_amplitude),
+                  format_number(m.phase_rad, 3), format_number(m.gamma, 3), format_optional(ratio, 3),
+                  format_number(m.equivalent_damping_N_s_m, 3), format_number(m.loss_factor, 3),
+                  format_number(r->wall_time_s, 3)});
+    } else {
+      row.resize(16, "-");
+    }
+    table.add_row(row);
+    point_messages(states.at(static_cast<std::size_t>(f.point - 1)), id, messages);
+  }
+  table.print(out);
+  for (const auto& message : messages) out << printable(message) << "\n";
+}
 
 void print_study(StudyStore& studies, std::int64_t id, const Study& study, std::ostream& out) {
   const auto summary = studies.summary(id);
@@ -65,6 +123,10 @@ void print_study(StudyStore& studies, std::int64_t id, const Study& study, std::
       << summary->interrupted << " interrupted, " << summary->running << " running, " << summary->pending
       << " pending)\n  study file     " << printable(study.source.study_path.string()) << "\n  base scenario  "
       << printable(study.source.scenario_path.string()) << "\n";
+  if (!study.file.frfs.empty()) {
+    print_frf_points(studies, id, out);
+    return;
+  }
   std::map<int, std::vector<PointMetrics>> metrics;
   for (auto& m : studies.metrics(id)) metrics[m.point].push_back(std::move(m));
   TextTable table({{"point", true},
@@ -89,12 +151,7 @@ void print_study(StudyStore& studies, std::int64_t id, const Study& study, std::
       row.resize(12, "-");
       row.push_back(describe_values(point));
       table.add_row(row);
-      if (!p.message.empty()) messages.push_back("point " + std::to_string(p.point) + ": " + p.message);
-      if (p.lease && !lease_is_alive(*p.lease)) {
-        messages.push_back("point " + std::to_string(p.point) + ": its process (" + std::to_string(p.lease->pid) +
-                           " on " + p.lease->host + ") is gone; 'pdamp study resume " + std::to_string(id) +
-                           "' runs it again");
-      }
+      point_messages(p, id, messages);
       continue;
     }
     for (const auto& m : metrics[p.point]) {
@@ -291,14 +348,20 @@ int study_plot(const std::vector<std::string>& args) {
       "out", po::value<std::string>(), "the picture (default: study-ID.png)");
   if (!command.parse(args)) return 0;
   const auto& vm = command.vm();
-  const std::int64_t id = OpenStudy(vm, "study plot", StoreAccess::read).id;
+  const OpenStudy open(vm, "study plot", StoreAccess::read);
+  const std::int64_t id = open.id;
+  const bool frf = !open.study.file.frfs.empty();
+  if (frf && (!vm["metric"].defaulted() || vm.count("x"))) {
+    throw InputError("--metric and --x are for [sweep] studies; study " + std::to_string(id) +
+                     " is a frequency response, drawn as its amplitude, phase, m_app and c_eq");
+  }
   const std::string db = vm["db"].as<std::string>();
-  const std::filesystem::path script = std::filesystem::path(PDAMP_TOOLS_DIR) / "plot_study.py";
+  const std::filesystem::path script = std::filesystem::path(PDAMP_TOOLS_DIR) / (frf ? "plot_frf.py" : "plot_study.py");
   if (!std::filesystem::exists(script)) {
     throw RuntimeFailure("the plotting script '" + script.string() + "' is missing (it comes with pdamp's sources)");
   }
-  std::vector<std::string> python{"/usr/bin/python3", script.string(),    "--db",     db,
-                                  "--study",          std::to_string(id), "--metric", vm["metric"].as<std::string>()};
+  std::vector<std::string> python{"/usr/bin/python3", script.string(), "--db", db, "--study", std::to_string(id)};
+  if (!frf) python.insert(python.end(), {"--metric", vm["metric"].as<std::string>()});
   if (vm.count("x")) python.insert(python.end(), {"--x", vm["x"].as<std::string>()});
   if (vm.count("out")) python.insert(python.end(), {"--out", vm["out"].as<std::string>()});
   std::vector<char*> argv;

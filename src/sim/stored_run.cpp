@@ -73,7 +73,7 @@ std::string exact_text(double value) {
 RunPlan plan_run(Model model, const Scenario& scenario, const std::optional<SnapshotSettings>& snapshots) {
   check_model_can_run(model, scenario);
   if (snapshots) check_snapshot_settings(*snapshots, scenario);
-  RunPlan plan{model, &scenario, std::nullopt, snapshots};
+  RunPlan plan{model, &scenario, std::nullopt, snapshots, false, {}};
   if (model == Model::hard && scenario.hard_restitution == HardRestitution::calibrated &&
       scenario.particles.count > 0) {
     try {
@@ -116,7 +116,8 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
           snapshots->at_observation(e, step);
         };
       }
-      result.outcome = run_simulation(*engine, scenario, writer, with_snapshots);
+      result.outcome = plan.body ? plan.body(*engine, scenario, writer, with_snapshots)
+                                 : run_simulation(*engine, scenario, writer, with_snapshots);
     }
     store_engine_results(store, result.run_id, *engine, result.outcome, warn);
   } else {

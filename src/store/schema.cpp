@@ -430,11 +430,80 @@ CREATE TABLE run_checkpoints (
   written_at      TEXT NOT NULL,                       -- ISO 8601, UTC
   state           BLOB NOT NULL                        -- the run loop's and the engine's state (docs/checkpoints.md)
 ) STRICT;
+
+/// Frequency-response studies ([frf]): each point's place on its curve, its response
+/// metrics, and its final state, which the next point of its curve starts from (the
+/// particles kept as a settled bed is, in initial_states, under a key naming the run).
+constexpr std::string_view v11_frf_studies = R"sql(
+CREATE TABLE study_frf_points (
+  study_id        INTEGER NOT NULL,
+  point           INTEGER NOT NULL,
+  curve           INTEGER NOT NULL CHECK (curve >= 1),  -- 1, 2, ...: one model, level and direction
+  model           TEXT NOT NULL CHECK (model IN ('soft', 'hard')),
+  direction       TEXT NOT NULL CHECK (direction IN ('up', 'down')),
+  host_alone      INTEGER NOT NULL CHECK (host_alone IN (0, 1)),  -- the reference curve without particles
+  mode            TEXT NOT NULL CHECK (mode IN ('force', 'base')),
+  level           REAL NOT NULL,  -- F0 (N) under a force, Y (m) under base motion
+  frequency_hz    REAL NOT NULL,
+  step            INTEGER NOT NULL CHECK (step >= 1),  -- along the curve, in the order the points run
+  previous_point  INTEGER,  -- the point whose final state this one starts from; NULL: the settled bed
+  PRIMARY KEY (study_id, point),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+
+CREATE TABLE study_frf_metrics (
+  study_id                  INTEGER NOT NULL,
+  point                     INTEGER NOT NULL,
+  run_id                    INTEGER NOT NULL UNIQUE REFERENCES runs (run_id) ON DELETE CASCADE,
+  settled                   INTEGER NOT NULL CHECK (settled IN (0, 1)),
+  cycles_to_steady          INTEGER NOT NULL,  -- cycles before the measured ones
+  cycles_run                INTEGER NOT NULL,
+  measured_cycles           INTEGER NOT NULL,
+  amplitude_m               REAL NOT NULL,  -- X of the first harmonic over the measured cycles
+  amplitude_spread_m        REAL NOT NULL,  -- max - min of the measured cycles' own X
+  phase_rad                 REAL NOT NULL,  -- of the host against the excitation; < 0: it lags
+  normalised_amplitude      REAL NOT NULL,  -- X/(F0/K) under a force, X/Y under base motion
+  gamma                     REAL NOT NULL,  -- X w^2 / |g|
+  impact_J_per_cycle        REAL NOT NULL,
+  friction_J_per_cycle      REAL NOT NULL,
+  viscous_J_per_cycle       REAL NOT NULL,  -- the host's damper
+  loss_factor               REAL NOT NULL,  -- D_cycle / (2 pi 1/2 K X_s^2), X_s the spring's stretch
+  apparent_mass_kg          REAL NOT NULL,
+  equivalent_damping_N_s_m  REAL NOT NULL,
+  particle_mass_kg          REAL NOT NULL,
+  wall_time_s               REAL NOT NULL,
+  PRIMARY KEY (study_id, point),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+
+CREATE TABLE study_point_states (
+  study_id    INTEGER NOT NULL,
+  point       INTEGER NOT NULL,
+  run_id      INTEGER NOT NULL UNIQUE REFERENCES runs (run_id) ON DELETE CASCADE,
+  state_id    INTEGER NOT NULL REFERENCES initial_states (state_id),  -- the spheres at the end
+  t_s         REAL NOT NULL,  -- the run's time at its end (whole cycles)
+  host_z_m    REAL NOT NULL,
+  host_v_m_s  REAL NOT NULL,
+  PRIMARY KEY (study_id, point),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+
+CREATE VIEW study_frf AS
+SELECT p.study_id, p.point, p.status, f.curve, f.model, f.direction, f.host_alone, f.mode, f.level, f.frequency_hz,
+       f.step, f.previous_point, m.run_id, m.settled, m.cycles_to_steady, m.cycles_run, m.measured_cycles,
+       m.amplitude_m, m.amplitude_spread_m, m.phase_rad, m.normalised_amplitude, m.gamma, m.impact_J_per_cycle,
+       m.friction_J_per_cycle, m.viscous_J_per_cycle,
+       m.impact_J_per_cycle + m.friction_J_per_cycle + m.viscous_J_per_cycle AS dissipated_J_per_cycle,
+       m.loss_factor, m.apparent_mass_kg, m.apparent_mass_kg / nullif(m.particle_mass_kg, 0) AS apparent_mass_ratio,
+       m.equivalent_damping_N_s_m, m.particle_mass_kg, m.wall_time_s
+FROM study_points p JOIN study_frf_points f ON f.study_id = p.study_id AND f.point = p.point
+LEFT JOIN study_frf_metrics m ON m.study_id = p.study_id AND m.point = p.point;
 )sql";
 
-constexpr std::array<std::string_view, 10> all{
-    v1_runs_samples_cycles,  v2_run_statistics, v3_initial_states, v4_comparisons, v5_solid_fraction,
-    v6_run_ids_never_reused, v7_run_snapshots,  v8_studies,        v9_study_jobs,  v10_run_checkpoints};
+constexpr std::array<std::string_view, 11> all{
+    v1_runs_samples_cycles, v2_run_statistics, v3_initial_states, v4_comparisons,      v5_solid_fraction,
+    v6_run_ids_never_reused, v7_run_snapshots, v8_studies,        v9_study_jobs,       v10_run_checkpoints,
+    v11_frf_studies};
 
 }  // namespace
 

@@ -142,6 +142,9 @@ void StudyStore::add_points(std::int64_t study_id, const std::vector<NewStudyPoi
 
 void StudyStore::insert_points(std::int64_t study_id, const std::vector<NewStudyPoint>& points) {
   sqlite::Statement point(db(), "INSERT INTO study_points (study_id, point, section) VALUES (?, ?, ?)");
+  sqlite::Statement frf(db(),
+                        "INSERT INTO study_frf_points (study_id, point, curve, model, direction, host_alone, mode, "
+                        "level, frequency_hz, step, previous_point) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   sqlite::Statement value(
       db(), "INSERT INTO study_point_values (study_id, point, key, value, number) VALUES (?, ?, ?, ?, ?)");
   for (const auto& p : points) {
@@ -149,6 +152,12 @@ void StudyStore::insert_points(std::int64_t study_id, const std::vector<NewStudy
     for (const auto& [key, text] : p.values) {
       value.bind(1, study_id).bind(2, p.point).bind(3, key).bind(4, text).bind(5, single_number(text)).run();
     }
+    if (!p.frf) continue;
+    const FrfPointRow& f = *p.frf;
+    frf.bind(1, study_id).bind(2, p.point).bind(3, f.curve).bind(4, f.model).bind(5, f.direction);
+    frf.bind(6, static_cast<std::int64_t>(f.host_alone)).bind(7, f.mode).bind(8, f.level).bind(9, f.frequency_hz);
+    frf.bind(10, f.step).bind(11, f.previous_point > 0 ? std::optional<std::int64_t>(f.previous_point) : std::nullopt);
+    frf.run();
   }
 }
 
@@ -235,9 +244,11 @@ std::optional<int> StudyStore::claim_point(std::int64_t study_id, int point, con
     if (!claim.step()) return std::nullopt;
     const int attempt = static_cast<int>(claim.column_int(0));
     claim.reset();
-    // A redone point's earlier metrics belong to runs of an earlier attempt.
-    sqlite::Statement old(db(), "DELETE FROM study_point_metrics WHERE study_id = ? AND point = ?");
-    old.bind(1, study_id).bind(2, point).run();
+    // A redone point's earlier metrics and final state belong to runs of an earlier attempt.
+    for (const char* table : {"study_point_metrics", "study_frf_metrics", "study_point_states"}) {
+      sqlite::Statement old(db(), std::string("DELETE FROM ") + table + " WHERE study_id = ? AND point = ?");
+      old.bind(1, study_id).bind(2, point).run();
+    }
     return attempt;
   });
 }
@@ -292,6 +303,120 @@ void StudyStore::complete_point(std::int64_t study_id, int point, int attempt, c
                            std::to_string(attempt) + " is no longer running here; its results are not counted");
     }
   });
+}
+
+void StudyStore::complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& r) {
+  sqlite::write_transaction(db(), [&] {
+    const ResponseMetrics& m = r.metrics;
+    sqlite::Statement metrics(
+        db(),
+        "INSERT INTO study_frf_metrics (study_id, point, run_id, settled, cycles_to_steady, cycles_run, "
+        "measured_cycles, amplitude_m, amplitude_spread_m, phase_rad, normalised_amplitude, gamma, "
+        "impact_J_per_cycle, friction_J_per_cycle, viscous_J_per_cycle, loss_factor, apparent_mass_kg, "
+        "equivalent_damping_N_s_m, particle_mass_kg, wall_time_s) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    metrics.bind(1, study_id).bind(2, point).bind(3, r.run_id).bind(4, static_cast<std::int64_t>(m.settled));
+    metrics.bind(5, m.cycles_to_steady).bind(6, r.cycles_run).bind(7, m.measured_cycles);
+    const double values[] = {m.amplitude_m,
+                             m.amplitude_spread_m,
+                             m.phase_rad,
+                             m.normalised_amplitude,
+                             m.gamma,
+                             m.impact_J_per_cycle,
+                             m.friction_J_per_cycle,
+                             m.viscous_J_per_cycle,
+                             m.loss_factor,
+                             m.apparent_mass_kg,
+                             m.equivalent_damping_N_s_m,
+                             r.particle_mass_kg,
+                             r.wall_time_s};
+    for (int k = 0; k < 13; ++k) metrics.bind(8 + k, values[k]);
+    metrics.run();
+    sqlite::Statement state(db(),
+                            "INSERT INTO study_point_states (study_id, point, run_id, state_id, t_s, host_z_m, "
+                            "host_v_m_s) VALUES (?, ?, ?, ?, ?, ?, ?)");
+    state.bind(1, study_id).bind(2, point).bind(3, r.run_id).bind(4, r.end.state_id).bind(5, r.end.t_s);
+    state.bind(6, r.end.host.z_m).bind(7, r.end.host.v_m_s).run();
+    sqlite::Statement done(db(), with_now("UPDATE study_points SET status = 'completed', message = '', "
+                                          "lease_host = NULL, lease_pid = NULL, lease_start = NULL, ended_at = ",
+                                          " WHERE study_id = ? AND point = ? AND attempt = ? AND status = 'running'"));
+    done.bind(1, study_id).bind(2, point).bind(3, attempt).run();
+    if (db().changes() != 1) {
+      throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) + " attempt " +
+                           std::to_string(attempt) + " is no longer running here; its results are not counted");
+    }
+  });
+}
+
+std::map<int, int> StudyStore::previous_points(std::int64_t study_id) {
+  sqlite::Statement q(db(),
+                      "SELECT point, previous_point FROM study_frf_points WHERE study_id = ? AND previous_point "
+                      "IS NOT NULL");
+  q.bind(1, study_id);
+  std::map<int, int> previous;
+  while (q.step()) previous[static_cast<int>(q.column_int(0))] = static_cast<int>(q.column_int(1));
+  return previous;
+}
+
+std::optional<FrfEndState> StudyStore::end_state(std::int64_t study_id, int point) {
+  sqlite::Statement q(db(),
+                      "SELECT s.run_id, s.state_id, s.t_s, s.host_z_m, s.host_v_m_s FROM study_point_states s "
+                      "JOIN study_points p ON p.study_id = s.study_id AND p.point = s.point "
+                      "WHERE s.study_id = ? AND s.point = ? AND p.status = 'completed'");
+  q.bind(1, study_id).bind(2, point);
+  if (!q.step()) return std::nullopt;
+  return FrfEndState{q.column_int(0), q.column_int(1), q.column_double(2), {q.column_double(3), q.column_double(4)}};
+}
+
+std::vector<FrfPointRecord> StudyStore::frf_points(std::int64_t study_id) {
+  sqlite::Statement q(db(),
+                      "SELECT f.point, f.status, f.curve, f.model, f.direction, f.host_alone, f.mode, f.level, "
+                      "f.frequency_hz, f.step, coalesce(f.previous_point, 0), f.run_id, f.settled, "
+                      "f.cycles_to_steady, f.cycles_run, f.measured_cycles, f.amplitude_m, f.amplitude_spread_m, "
+                      "f.phase_rad, f.normalised_amplitude, f.gamma, f.impact_J_per_cycle, f.friction_J_per_cycle, "
+                      "f.viscous_J_per_cycle, f.loss_factor, f.apparent_mass_kg, f.equivalent_damping_N_s_m, "
+                      "f.particle_mass_kg, f.wall_time_s FROM study_frf f WHERE f.study_id = ? ORDER BY f.point");
+  q.bind(1, study_id);
+  std::vector<FrfPointRecord> rows;
+  while (q.step()) {
+    FrfPointRecord r;
+    r.point = static_cast<int>(q.column_int(0));
+    r.status = q.column_text(1);
+    r.place = {static_cast<int>(q.column_int(2)),
+               q.column_text(3),
+               q.column_text(4),
+               q.column_int(5) != 0,
+               q.column_text(6),
+               q.column_double(7),
+               q.column_double(8),
+               static_cast<int>(q.column_int(9)),
+               static_cast<int>(q.column_int(10))};
+    if (!q.is_null(11)) {
+      FrfPointResult m;
+      m.run_id = q.column_int(11);
+      m.metrics.settled = q.column_int(12) != 0;
+      m.metrics.cycles_to_steady = static_cast<int>(q.column_int(13));
+      m.cycles_run = static_cast<int>(q.column_int(14));
+      m.metrics.measured_cycles = static_cast<int>(q.column_int(15));
+      double* values[] = {&m.metrics.amplitude_m,
+                          &m.metrics.amplitude_spread_m,
+                          &m.metrics.phase_rad,
+                          &m.metrics.normalised_amplitude,
+                          &m.metrics.gamma,
+                          &m.metrics.impact_J_per_cycle,
+                          &m.metrics.friction_J_per_cycle,
+                          &m.metrics.viscous_J_per_cycle,
+                          &m.metrics.loss_factor,
+                          &m.metrics.apparent_mass_kg,
+                          &m.metrics.equivalent_damping_N_s_m,
+                          &m.particle_mass_kg,
+                          &m.wall_time_s};
+      for (int k = 0; k < 13; ++k) *values[k] = q.column_double(16 + k);
+      r.result = m;
+    }
+    rows.push_back(std::move(r));
+  }
+  return rows;
 }
 
 void StudyStore::end_point(std::int64_t study_id, int point, int attempt, PointStatus status,

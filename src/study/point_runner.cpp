@@ -6,6 +6,7 @@
 
 #include "pdamp/compare/comparison.hpp"
 #include "pdamp/errors.hpp"
+#include "pdamp/sim/frf_point.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/stored_run.hpp"
 #include "pdamp/store/process_lease.hpp"
@@ -29,7 +30,14 @@ std::string not_claimed(StudyStore& studies, std::int64_t study_id, int point) {
 struct PointRuns {
   std::vector<StoredRun> runs;
   std::optional<std::int64_t> comparison_id;
+  std::optional<FrfPointResult> frf;  ///< a completed frequency-response point's
 };
+
+double kinetic_energy_J(const Particles& p) {
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < p.size(); ++i) sum += 0.5 * p.mass_kg[i] * p.velocity_m_s.col(i).squaredNorm();
+  return sum;
+}
 
 class PointExecution {
  public:
@@ -44,7 +52,13 @@ class PointExecution {
         control_(&control) {}
 
   PointRuns run() {
-    const Scenario scenario = point_scenario(*study_, study_->points.at(static_cast<std::size_t>(point_ - 1)));
+    const StudyPoint& point = study_->points.at(static_cast<std::size_t>(point_ - 1));
+    return point.frf ? run_frf(point) : run_sweep(point);
+  }
+
+ private:
+  PointRuns run_sweep(const StudyPoint& point) {
+    const Scenario scenario = point_scenario(*study_, point);
     std::vector<RunPlan> plans;
     if (study_->file.models != StudyModels::hard) plans.push_back(plan_run(Model::soft, scenario, control_->snapshots));
     if (study_->file.models != StudyModels::soft) plans.push_back(plan_run(Model::hard, scenario, control_->snapshots));
@@ -79,7 +93,61 @@ class PointExecution {
     return result;
   }
 
- private:
+  /// A frequency-response point: from the previous point's final state (continuation) or
+  /// from the settled bed, its model's run to steady state, and its own final state kept
+  /// for the next point.
+  PointRuns run_frf(const StudyPoint& point) {
+    const FrfPoint& frf = *point.frf;
+    std::optional<FrfEndState> from;
+    if (frf.previous > 0) {
+      from = studies_.end_state(study_id_, frf.previous);
+      if (!from) {
+        throw RuntimeFailure("point " + std::to_string(point_) + " continues from point " +
+                             std::to_string(frf.previous) + ", which is not completed; run that point first");
+      }
+    }
+    const Scenario scenario = point_scenario(*study_, point, from ? std::optional(from->host) : std::nullopt);
+    RunPlan plan = plan_run(frf.model, scenario);
+    FrfRun frf_run;
+    plan.body = [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s,
+                                                                 RunRecorder& recorder, const RunControl& c) {
+      return run_frf_simulation(engine, s, recorder, c, criterion, frf_run);
+    };
+    std::optional<InitialBed> bed;
+    const BedSource bed_source = [&]() -> const InitialBed& {
+      if (bed) return *bed;
+      if (from) {
+        bed = InitialBed{store_->load_initial_particles(from->state_id), from->state_id, true, from->t_s};
+      } else {
+        report(0.0, "settling");
+        bed =
+            prepare_initial_bed(scenario, *store_, control_->stop, [this](double, double) { report(0.0, "settling"); });
+      }
+      return *bed;
+    };
+    const std::string_view model = to_string(frf.model);
+    RunControl run_control;
+    run_control.stop = control_->stop;
+    run_control.progress = [&, duration = scenario.run.duration_s](double t) { report(t / duration, model); };
+    PointRuns result;
+    result.runs.push_back(
+        run_and_store(*store_, plan, bed_source, run_control, control_->warn,
+                      [&](std::int64_t run_id) { studies_.link_run(study_id_, point_, attempt_, model, run_id); }));
+    const StoredRun& run = result.runs.back();
+    if (run.outcome.status != RunStatus::completed) return result;
+    const State& end = frf_run.final_state;
+    const std::int64_t state_id =
+        store_->save_initial_state("frequency-response point end: run " + std::to_string(run.run_id), end.particles,
+                                   end.observation.t_s, kinetic_energy_J(end.particles), run.outcome.wall_time_s);
+    result.frf = FrfPointResult{run.run_id,
+                                frf_run.point.metrics,
+                                frf_run.point.cycles_run,
+                                end.particles.total_mass_kg(),
+                                run.outcome.wall_time_s,
+                                {run.run_id, state_id, end.observation.t_s, end.observation.host}};
+    return result;
+  }
+
   void report(double fraction, std::string_view phase) const {
     if (control_->progress) control_->progress(fraction, phase);
   }
@@ -103,6 +171,10 @@ PointResult finish(StudyStore& studies, std::int64_t study_id, int point, int at
       return {status, attempt, message};
     }
     run_ids.push_back(run.run_id);
+  }
+  if (result.frf) {
+    studies.complete_frf_point(study_id, point, attempt, *result.frf);
+    return {PointStatus::completed, attempt, ""};
   }
   studies.complete_point(study_id, point, attempt, run_ids, result.comparison_id);
   return {PointStatus::completed, attempt, ""};

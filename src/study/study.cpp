@@ -1,6 +1,7 @@
 #include "pdamp/study/study.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <set>
 #include <sstream>
@@ -24,8 +25,45 @@ void check_name(const std::string& name, const std::string& origin) {
   }
 }
 
-std::size_t count_points(const StudyFile& file, bool force, const std::string& origin) {
+std::vector<Model> models_of(StudyModels models) {
+  std::vector<Model> list;
+  if (models != StudyModels::hard) list.push_back(Model::soft);
+  if (models != StudyModels::soft) list.push_back(Model::hard);
+  return list;
+}
+
+std::vector<FrfDirection> directions_of(FrfDirection direction) {
+  if (direction == FrfDirection::both) return {FrfDirection::up, FrfDirection::down};
+  return {direction};
+}
+
+/// The curves of an [frf] section, each (model, level, direction, host alone).
+std::vector<FrfPoint> frf_curves(const StudyFile& file, std::size_t section) {
+  const FrfSection& frf = file.frfs[section];
+  std::vector<FrfPoint> curves;
+  const auto models = models_of(frf.models.value_or(file.models));
+  for (const Model model : models) {
+    for (const auto& level : frf.levels) {
+      for (const FrfDirection direction : directions_of(frf.direction)) {
+        curves.push_back({section, 0, model, direction, false, level, "", 0, 0});
+      }
+    }
+  }
+  // The host alone is linear: one curve gives its response at every level and direction.
+  if (frf.host_alone)
+    curves.push_back({section, 0, models.front(), FrfDirection::up, true, frf.levels.front(), "", 0, 0});
+  return curves;
+}
+
+std::size_t frf_points(const StudyFile& file) {
   std::size_t total = 0;
+  for (std::size_t s = 0; s < file.frfs.size(); ++s)
+    total += frf_curves(file, s).size() * file.frfs[s].frequencies.size();
+  return total;
+}
+
+std::size_t count_points(const StudyFile& file, bool force, const std::string& origin) {
+  std::size_t total = frf_points(file);
   for (const auto& sweep : file.sweeps) total += sweep.points_up_to(max_points);
   if (total > max_points) {
     throw InputError(origin + ": the study has more than " + std::to_string(max_points) +
@@ -43,7 +81,7 @@ std::size_t count_points(const StudyFile& file, bool force, const std::string& o
 void expand(const Sweep& sweep, std::vector<StudyPoint>& points) {
   std::vector<std::size_t> index(sweep.axes.size(), 0);
   for (;;) {
-    StudyPoint p{static_cast<int>(points.size()) + 1, sweep.section, {}};
+    StudyPoint p{static_cast<int>(points.size()) + 1, sweep.section, {}, std::nullopt};
     for (std::size_t a = 0; a < sweep.axes.size(); ++a) {
       const auto& axis = sweep.axes[a];
       for (std::size_t k = 0; k < axis.keys.size(); ++k) p.values.emplace_back(axis.keys[k], axis.values[index[a]][k]);
@@ -54,6 +92,36 @@ void expand(const Sweep& sweep, std::vector<StudyPoint>& points) {
     while (a > 0 && ++index[a - 1] == sweep.axes[a - 1].size()) index[--a] = 0;
     if (a == 0) return;
   }
+}
+
+void expand(const StudyFile& file, std::size_t section, std::vector<StudyPoint>& points) {
+  const FrfSection& frf = file.frfs[section];
+  const bool base = frf.mode == ExcitationMode::base_motion;
+  for (FrfPoint curve : frf_curves(file, section)) {
+    curve.curve = points.empty() || !points.back().frf ? 1 : points.back().frf->curve + 1;
+    auto frequencies = frf.frequencies;
+    if (curve.direction == FrfDirection::down) std::reverse(frequencies.begin(), frequencies.end());
+    for (std::size_t i = 0; i < frequencies.size(); ++i) {
+      StudyPoint p{static_cast<int>(points.size()) + 1, frf.section, frf.settings, curve};
+      p.frf->frequency_hz = frequencies[i];
+      p.frf->step = static_cast<int>(i) + 1;
+      p.frf->previous = frf.start == FrfStart::continuation && i > 0 ? p.point - 1 : 0;
+      p.values.emplace_back("excitation.mode", base ? "base" : "force");
+      p.values.emplace_back(base ? "excitation.amplitude_m" : "excitation.force_N", curve.level);
+      p.values.emplace_back("excitation.frequency_hz", frequencies[i]);
+      if (curve.host_alone) {
+        std::erase_if(p.values, [](const auto& v) { return v.first == "particles.count"; });
+        p.values.emplace_back("particles.count", "0");
+      }
+      points.push_back(std::move(p));
+    }
+  }
+}
+
+std::string exact(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", x);
+  return text;
 }
 
 /// Resolved `key = value` lines of a canonical scenario, keyed by "[section] key".
@@ -95,6 +163,33 @@ std::map<std::string, std::string> sweep_keys(const StudyFile& file) {
   return keys;
 }
 
+/// Each [frf] section's settings, keyed by "[section] key".
+std::map<std::string, std::string> frf_keys(const StudyFile& file) {
+  std::map<std::string, std::string> keys;
+  auto join = [](const std::vector<std::string>& values) {
+    std::string text;
+    for (const auto& v : values) text += (text.empty() ? "" : ", ") + v;
+    return text;
+  };
+  for (const auto& f : file.frfs) {
+    const std::string s = "[" + f.section + "] ";
+    const SteadyStateCriterion& c = f.criterion;
+    keys[s + "mode"] = f.mode == ExcitationMode::force ? "force" : "base";
+    keys[s + "levels"] = join(f.levels);
+    keys[s + "frequencies"] = join(f.frequencies);
+    keys[s + "direction"] = to_string(f.direction);
+    keys[s + "host_alone"] = f.host_alone ? "true" : "false";
+    keys[s + "start"] = to_string(f.start);
+    keys[s + "models"] = f.models ? to_string(*f.models) : "(the study's)";
+    keys[s + "steady state"] = std::to_string(c.consecutive_cycles) + " cycles within " + exact(c.amplitude_tolerance) +
+                               " and " + exact(c.phase_tolerance_rad) + " rad, cycles " + std::to_string(c.min_cycles) +
+                               " to " + std::to_string(c.max_cycles) + ", " + std::to_string(c.measured_cycles) +
+                               " measured";
+    for (const auto& [key, value] : f.settings) keys[s + key] = value;
+  }
+  return keys;
+}
+
 void map_differences(std::vector<std::string>& out, const std::string& prefix,
                      const std::map<std::string, std::string>& now, const std::map<std::string, std::string>& stored) {
   for (const auto& [key, value] : now) {
@@ -109,7 +204,7 @@ void map_differences(std::vector<std::string>& out, const std::string& prefix,
 std::vector<std::string> canonical_points(const Study& study) {
   std::vector<std::string> texts;
   for (const auto& p : study.points) {
-    texts.push_back(p.section + "\n" + point_scenario(study, p).canonical_text);
+    texts.push_back(p.section + "\n" + describe_curve(p) + "\n" + point_scenario(study, p).canonical_text);
   }
   return texts;
 }
@@ -141,14 +236,46 @@ Study make_study(StudySource source, bool force) {
   study.source = std::move(source);
   study.points.reserve(count_points(study.file, force, origin));
   for (const auto& sweep : study.file.sweeps) expand(sweep, study.points);
+  for (std::size_t s = 0; s < study.file.frfs.size(); ++s) expand(study.file, s, study.points);
   return study;
 }
 
-Scenario point_scenario(const Study& study, const StudyPoint& point) {
+Scenario point_scenario(const Study& study, const StudyPoint& point, const std::optional<HostState>& host_start) {
   ScenarioOverrides overrides{"scenario.name=" + point_name(study, point.point)};
   for (const auto& [key, value] : point.values) overrides.push_back(key + "=" + value);
+  if (point.frf) {
+    const SteadyStateCriterion& c = point_criterion(study, point);
+    const double period_s = 1.0 / std::stod(point.frf->frequency_hz);
+    overrides.push_back("run.duration_s=" + exact((c.max_cycles + c.measured_cycles) * period_s));
+    overrides.push_back("run.sample_interval_s=" + exact(period_s));
+    if (host_start) {
+      overrides.push_back("host.z0_m=" + exact(host_start->z_m));
+      overrides.push_back("host.v0_m_s=" + exact(host_start->v_m_s));
+    }
+  }
   return parse_scenario(study.source.scenario_text, point_name(study, point.point), study.source.scenario_path.string(),
                         overrides, "swept");
+}
+
+const SteadyStateCriterion& point_criterion(const Study& study, const StudyPoint& point) {
+  if (!point.frf) throw RuntimeFailure("point " + std::to_string(point.point) + " is not a frequency-response point");
+  return study.file.frfs.at(point.frf->section).criterion;
+}
+
+void refuse_frf_study(const Study& study, const std::string& command) {
+  if (study.file.frfs.empty()) return;
+  throw InputError(study.source.study_path.string() + ": [" + study.file.frfs.front().section + "]: " + command +
+                   " runs [sweep] studies only: the points of a frequency-response curve run in order, each from "
+                   "the previous point's final state; run it with 'pdamp study run' (--jobs runs curves side by "
+                   "side)");
+}
+
+std::string describe_curve(const StudyPoint& point) {
+  if (!point.frf) return "";
+  const FrfPoint& f = *point.frf;
+  return std::string(to_string(f.model)) + (f.host_alone ? " host alone" : "") + " " +
+         std::string(to_string(f.direction)) + ", curve " + std::to_string(f.curve) + ", step " +
+         std::to_string(f.step) + (f.previous > 0 ? " after point " + std::to_string(f.previous) : " from the bed");
 }
 
 std::string describe_values(const StudyPoint& point) {
@@ -158,13 +285,12 @@ std::string describe_values(const StudyPoint& point) {
 }
 
 void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots) {
-  std::vector<Model> models;
-  if (study.file.models != StudyModels::hard) models.push_back(Model::soft);
-  if (study.file.models != StudyModels::soft) models.push_back(Model::hard);
+  const std::vector<Model> models = models_of(study.file.models);
   for (const auto& point : study.points) {
     try {
       const Scenario scenario = point_scenario(study, point);
-      for (const Model model : models) plan_run(model, scenario, snapshots);
+      for (const Model model : point.frf ? std::vector<Model>{point.frf->model} : models)
+        plan_run(model, scenario, snapshots);
     } catch (const InputError& e) {
       throw InputError(study.source.study_path.string() + ": point " + std::to_string(point.point) + " of " +
                        std::to_string(study.points.size()) + " ([" + point.section + "] " + describe_values(point) +
@@ -178,6 +304,7 @@ std::vector<std::string> study_differences(const Study& stored, const Study& now
   std::vector<std::string> out;
   differ(out, "[study] models", std::string(to_string(now.file.models)), std::string(to_string(stored.file.models)));
   map_differences(out, "", sweep_keys(now.file), sweep_keys(stored.file));
+  map_differences(out, "", frf_keys(now.file), frf_keys(stored.file));
   const auto base = [](const Study& s) {
     return canonical_lines(
         parse_scenario(s.source.scenario_text, "base", s.source.scenario_path.string()).canonical_text);

@@ -55,10 +55,11 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
   return row[b.size()];
 }
 
-/// Why `key` cannot be swept, or nothing if it can.
-std::optional<std::string> unsweepable(const std::string& key) {
+}  // namespace
+
+std::optional<std::string> unsettable_key(const std::string& key) {
   if (key == "scenario.name")
-    return std::string("scenario.name cannot be swept: the study names each point's scenario");
+    return std::string("scenario.name cannot be set by a study: the study names each point's scenario");
   const auto keys = scenario_key_names();
   if (std::find(keys.begin(), keys.end(), key) != keys.end()) return std::nullopt;
   std::string why = "'" + key + "' is not a scenario key";
@@ -68,6 +69,8 @@ std::optional<std::string> unsweepable(const std::string& key) {
   if (edit_distance(key, *closest) <= 3) why += "; did you mean " + *closest + "?";
   return why + " (run 'pdamp keys' for the list)";
 }
+
+namespace {
 
 std::vector<std::string> split_keys(const std::string& text) {
   std::string spaced = text;
@@ -112,7 +115,7 @@ class SweepBuilder {
       add_zip(entry);
       return;
     }
-    if (const auto why = unsweepable(entry.key)) fail(entry.where, "[" + sweep_.section + "] " + *why);
+    if (const auto why = unsettable_key(entry.key)) fail(entry.where, "[" + sweep_.section + "] " + *why);
     for (const auto& k : keys_) {
       if (k.key == entry.key) {
         fail(entry.where, "[" + sweep_.section + "] " + entry.key + " is given twice (first on line " +
@@ -155,7 +158,7 @@ class SweepBuilder {
     const std::string where = "[" + sweep_.section + "] zip = " + entry.value;
     if (keys.size() < 2) fail(entry.where, where + ": a zip names two or more keys to vary together");
     for (const auto& key : keys) {
-      if (const auto why = unsweepable(key)) fail(entry.where, where + ": " + *why);
+      if (const auto why = unsettable_key(key)) fail(entry.where, where + ": " + *why);
       if (std::count(keys.begin(), keys.end(), key) > 1) fail(entry.where, where + ": " + key + " is named twice");
       if (zip_of(key)) fail(entry.where, where + ": " + key + " is already in another zip");
     }
@@ -222,13 +225,17 @@ class SweepBuilder {
   std::vector<Zip> zips_;
 };
 
-bool is_sweep_section(const std::string& section) {
-  if (section == "sweep") return true;
-  if (!section.starts_with("sweep.") || section.size() == 6) return false;
-  return std::all_of(section.begin() + 6, section.end(), [](char c) {
+/// `kind` or `kind.NAME`, NAME of letters, digits, _ and -.
+bool is_section_of(const std::string& section, std::string_view kind) {
+  if (section == kind) return true;
+  const std::size_t n = kind.size() + 1;
+  if (!section.starts_with(std::string(kind) + ".") || section.size() == n) return false;
+  return std::all_of(section.begin() + static_cast<std::ptrdiff_t>(n), section.end(), [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '-';
   });
 }
+bool is_sweep_section(const std::string& section) { return is_section_of(section, "sweep"); }
+bool is_frf_section(const std::string& section) { return is_section_of(section, "frf"); }
 
 StudyModels parse_models(const ini::Entry& entry) {
   for (const auto& [value, name] : model_names) {
@@ -238,19 +245,25 @@ StudyModels parse_models(const ini::Entry& entry) {
                         "': must be soft, hard or both (both models from one settled bed, compared)");
 }
 
-/// The study file's sections: [study] and the sweeps, each once, and nothing before them.
+/// The study file's sections: [study] and the sweeps or the frequency responses, each
+/// once, and nothing before them.
 void check_sections(const ini::Document& document) {
   std::map<std::string, int> seen;
+  const ini::Section* sweep = nullptr;
+  const ini::Section* frf = nullptr;
   for (const auto& section : document.sections) {
-    if (section.name == "frf" || section.name.starts_with("frf.")) {
-      fail(section.where, "[" + section.name +
-                              "]: frequency-response studies are not yet supported; this pdamp runs [sweep] "
-                              "studies only");
-    }
-    if (section.name != "study" && !is_sweep_section(section.name)) {
+    if (section.name != "study" && !is_sweep_section(section.name) && !is_frf_section(section.name)) {
       fail(section.where, "unknown section [" + ini::printable(section.name) +
-                              "]: a study file has [study] and one or more [sweep] or "
-                              "[sweep.NAME] sections (NAME of letters, digits, _ and -)");
+                              "]: a study file has [study] and one or more [sweep] or [sweep.NAME] sections, or "
+                              "one or more [frf] or [frf.NAME] sections (NAME of letters, digits, _ and -)");
+    }
+    if (is_sweep_section(section.name) && !sweep) sweep = &section;
+    if (is_frf_section(section.name) && !frf) frf = &section;
+    if (sweep && frf) {
+      fail(section.where, "[" + section.name + "]: a study has [sweep] or [frf] sections, not both ([" +
+                              (sweep == &section ? frf : sweep)->name +
+                              "] is there too); a grid of frequency responses is not supported: make one "
+                              "[frf] study per case");
     }
     if (const auto [it, fresh] = seen.emplace(section.name, section.line); !fresh) {
       fail(section.where, "[" + section.name + "] appears twice (first on line " + std::to_string(it->second) + ")");
@@ -272,10 +285,15 @@ StudyFile parse_study_file(const std::string& text, const std::string& origin, c
   study.name = default_name;
   std::map<std::string, int> given;  // [study] keys and their lines
   std::map<std::string, SweepBuilder> builders;
+  std::map<std::string, std::vector<ini::Entry>> frf_entries;
   for (const auto& section : document.sections) {
-    if (section.name != "study") builders.emplace(section.name, SweepBuilder(section));
+    if (is_sweep_section(section.name)) builders.emplace(section.name, SweepBuilder(section));
   }
   for (const auto& entry : document.entries) {
+    if (is_frf_section(entry.section)) {
+      frf_entries[entry.section].push_back(entry);
+      continue;
+    }
     if (entry.section != "study") {
       builders.at(entry.section).add(entry);
       continue;
@@ -303,9 +321,14 @@ StudyFile parse_study_file(const std::string& text, const std::string& origin, c
     }
   }
   for (const auto& section : document.sections) {
-    if (section.name != "study") study.sweeps.push_back(builders.at(section.name).build());
+    if (is_sweep_section(section.name)) study.sweeps.push_back(builders.at(section.name).build());
+    if (is_frf_section(section.name)) study.frfs.push_back(parse_frf_section(section, frf_entries[section.name]));
   }
-  if (study.sweeps.empty()) throw InputError(origin + ": no [sweep] section: a study varies at least one key");
+  if (study.sweeps.empty() && study.frfs.empty()) {
+    throw InputError(origin +
+                     ": no [sweep] or [frf] section: a study varies at least one key, or runs frequency "
+                     "responses");
+  }
   return study;
 }
 

@@ -6,12 +6,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
 #include <deque>
 #include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "pdamp/errors.hpp"
@@ -195,11 +197,12 @@ void reclaim_abandoned(StudyStore& studies, std::int64_t study_id) {
 class StudyRun {
  public:
   StudyRun(RunStore& store, std::int64_t study_id, const StudyRunOptions& options)
-      : studies_(store), study_id_(study_id), options_(&options) {
+      : studies_(store), study_id_(study_id), options_(&options), previous_(studies_.previous_points(study_id)) {
     reclaim_abandoned(studies_, study_id);
     int done = 0;
     for (const auto& p : studies_.points(study_id)) {
       if (p.status == PointStatus::completed) {
+        completed_.insert(p.point);
         ++done;
       } else if (p.status == PointStatus::running) {
         report_.problems.push_back("point " + std::to_string(p.point) + " is running in " +
@@ -223,9 +226,11 @@ class StudyRun {
         pool.signal_all(SIGINT);
       }
       if (stopped_at && std::chrono::steady_clock::now() - *stopped_at > stop_grace) pool.signal_all(SIGKILL);
-      while (!stopped_at && pool.size() < static_cast<std::size_t>(options_->jobs) && !queue_.empty()) {
-        pool.start(queue_.front());
-        queue_.pop_front();
+      while (!stopped_at && pool.size() < static_cast<std::size_t>(options_->jobs)) {
+        const auto next = next_ready();
+        if (next == queue_.end()) break;
+        pool.start(*next);
+        queue_.erase(next);
       }
       if (pool.size() == 0) break;
       pool.poll_output(std::chrono::milliseconds(250));
@@ -234,10 +239,25 @@ class StudyRun {
     }
     report_.stopped = stopped_at.has_value();
     report_.not_started = static_cast<int>(queue_.size());
+    if (!report_.stopped) {
+      for (const int point : queue_) {
+        report_.problems.push_back("point " + std::to_string(point) + " not run: it continues from point " +
+                                   std::to_string(previous_.at(point)) + ", which did not complete");
+      }
+    }
     return report_;
   }
 
  private:
+  /// The first queued point that can start: a point of a frequency-response curve waits
+  /// for the point it continues from (a curve is sequential; curves run side by side).
+  std::deque<int>::iterator next_ready() {
+    return std::find_if(queue_.begin(), queue_.end(), [&](int point) {
+      const auto it = previous_.find(point);
+      return it == previous_.end() || completed_.contains(it->second);
+    });
+  }
+
   /// Counts how a worker's point ended, as the store says; a point its worker left
   /// running (a crash, or a kill after a stop) ends as failed or interrupted here.
   void settle(const Worker& worker, int status, bool stopping) {
@@ -253,6 +273,7 @@ class StudyRun {
     const bool completed = state && state->status == PointStatus::completed;
     if (options_->events.ended) options_->events.ended(worker.point, completed);
     if (completed) {
+      completed_.insert(worker.point);
       ++report_.completed;
     } else if (WIFEXITED(status) && WEXITSTATUS(status) == exit_point_not_claimed) {
       ++report_.elsewhere;
@@ -272,9 +293,26 @@ class StudyRun {
   StudyStore studies_;
   std::int64_t study_id_;
   const StudyRunOptions* options_;
+  std::map<int, int> previous_;  ///< the point each continuing point starts from
+  std::set<int> completed_;
   std::deque<int> queue_;
   StudyRunReport report_;
 };
+
+std::optional<FrfPointRow> frf_row(const Study& study, const StudyPoint& p) {
+  if (!p.frf) return std::nullopt;
+  const FrfPoint& f = *p.frf;
+  const bool base = study.file.frfs.at(f.section).mode == ExcitationMode::base_motion;
+  return FrfPointRow{f.curve,
+                     std::string(to_string(f.model)),
+                     std::string(to_string(f.direction)),
+                     f.host_alone,
+                     base ? "base" : "force",
+                     std::stod(f.level),
+                     std::stod(f.frequency_hz),
+                     f.step,
+                     f.previous};
+}
 
 std::string join_lines(const std::vector<std::string>& lines) {
   std::string text;
@@ -297,7 +335,7 @@ std::int64_t find_or_create_study(RunStore& store, const Study& study) {
       return record->study_id;
     }
     std::vector<NewStudyPoint> points;
-    for (const auto& p : study.points) points.push_back({p.point, p.section, p.values});
+    for (const auto& p : study.points) points.push_back({p.point, p.section, p.values, frf_row(study, p)});
     try {
       return studies.create_study(
           {study.file.name, std::string(to_string(study.file.models)), study.source.study_path.string(),

@@ -30,6 +30,9 @@ struct RunPlan {
   /// The hard engine counts where its collisions come from into its statistics
   /// (hard/event_diagnosis.hpp); the results are the same bits.
   bool diagnose_events = false;
+  /// What drives the engine once it is built: empty for the run loop over the scenario's
+  /// duration (run_simulation), or another driver (a frequency-response point's cycles).
+  std::function<RunOutcome(Engine&, const Scenario&, RunRecorder&, const RunControl&)> body;
 };
 
 /// Checks that `model` can run `scenario` (check_model_can_run) with these snapshots

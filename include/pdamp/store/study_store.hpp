@@ -7,12 +7,14 @@
 /// is run again.
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
 #include <vector>
 
+#include "pdamp/analysis/frf_response.hpp"
 #include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/run_store.hpp"
 
@@ -26,10 +28,47 @@ struct NewStudy {
   std::string name, models, study_file, study_text, scenario_file, scenario_text;
 };
 
+/// A frequency-response point's place on its curve (a row of `study_frf_points`).
+struct FrfPointRow {
+  int curve = 0;
+  std::string model, direction;  ///< "soft" or "hard"; "up" or "down"
+  bool host_alone = false;
+  std::string mode;  ///< "force" or "base"
+  double level = 0.0, frequency_hz = 0.0;
+  int step = 0;
+  int previous_point = 0;  ///< 0: from the settled bed
+};
+
 struct NewStudyPoint {
   int point = 0;
   std::string section;
   std::vector<std::pair<std::string, std::string>> values;  ///< (scenario key, value text)
+  std::optional<FrfPointRow> frf;
+};
+
+/// Where a frequency-response point ended: the next point of its curve starts there.
+struct FrfEndState {
+  std::int64_t run_id = 0;
+  std::int64_t state_id = 0;  ///< its spheres, in initial_states
+  double t_s = 0.0;
+  HostState host;
+};
+
+/// What a completed frequency-response point stores (`study_frf_metrics`, `study_point_states`).
+struct FrfPointResult {
+  std::int64_t run_id = 0;
+  ResponseMetrics metrics;
+  int cycles_run = 0;
+  double particle_mass_kg = 0.0, wall_time_s = 0.0;
+  FrfEndState end;
+};
+
+/// A row of the `study_frf` view: a point of a curve and, once completed, its metrics.
+struct FrfPointRecord {
+  int point = 0;
+  std::string status;
+  FrfPointRow place;
+  std::optional<FrfPointResult> result;
 };
 
 struct StudyRecord {
@@ -113,6 +152,12 @@ class StudyStore {
   std::vector<StudyPointState> points(std::int64_t study_id);
   std::optional<StudyPointState> point(std::int64_t study_id, int point);
   std::vector<PointMetrics> metrics(std::int64_t study_id);
+  /// Each frequency-response point with its place and, if completed, its metrics.
+  std::vector<FrfPointRecord> frf_points(std::int64_t study_id);
+  /// The point each frequency-response point starts from, for those continuing another.
+  std::map<int, int> previous_points(std::int64_t study_id);
+  /// The final state of a completed frequency-response point.
+  std::optional<FrfEndState> end_state(std::int64_t study_id, int point);
 
   /// Marks a pending, failed or interrupted point running under `lease` and starts its
   /// next attempt; returns the attempt, or nothing if the point is completed or running.
@@ -122,6 +167,8 @@ class StudyStore {
   /// and cycles, and the comparison of the two models if there is one.
   void complete_point(std::int64_t study_id, int point, int attempt, const std::vector<std::int64_t>& run_ids,
                       std::optional<std::int64_t> comparison_id);
+  /// Completes a frequency-response point's attempt with its metrics and final state.
+  void complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& result);
   /// Ends the point's attempt as failed or interrupted with a message.
   void end_point(std::int64_t study_id, int point, int attempt, PointStatus status, const std::string& message);
   /// A point still running under `lease`, whose process is gone, ends as `status` (failed

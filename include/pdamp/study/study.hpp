@@ -11,7 +11,9 @@
 #include <utility>
 #include <vector>
 
+#include "pdamp/model/host.hpp"
 #include "pdamp/scenario/scenario.hpp"
+#include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/snapshots.hpp"
 #include "pdamp/study/study_file.hpp"
 
@@ -29,12 +31,26 @@ struct StudySource {
 /// missing or unreadable.
 StudySource read_study_source(const std::filesystem::path& study_file);
 
-/// One point: the sweep section it comes from and the values it sets, in the section's
-/// key order.
+/// Where a point of a frequency-response curve sits on it. A curve is one model, level
+/// and direction (or the host alone), its points in the order they run.
+struct FrfPoint {
+  std::size_t section = 0;  ///< in StudyFile::frfs
+  int curve = 0;            ///< 1, 2, ... over the study
+  Model model = Model::hard;
+  FrfDirection direction = FrfDirection::up;  ///< up or down
+  bool host_alone = false;
+  std::string level, frequency_hz;  ///< as written (F0 in N or Y in m; Hz)
+  int step = 0;                     ///< 1, 2, ... along the curve
+  int previous = 0;                 ///< the point whose final state this one starts from; 0: the settled bed
+};
+
+/// One point: the section it comes from and the scenario values it sets, in the
+/// section's key order; a frequency-response point also its place on its curve.
 struct StudyPoint {
   int point = 0;  ///< 1, 2, ... over the whole study, in file order
   std::string section;
   std::vector<std::pair<std::string, std::string>> values;  ///< (scenario key, value text)
+  std::optional<FrfPoint> frf;
 };
 
 /// Points a study may have without --force, and with it.
@@ -48,13 +64,22 @@ struct Study {
 };
 
 /// Parses the study text and expands its points: the sweep sections in file order, each
-/// a grid whose first axis varies slowest. A study over max_points_without_force points
+/// a grid whose first axis varies slowest; or the [frf] sections in file order, each its
+/// curves (model, then level, then up before down; its host-alone curve last), each
+/// curve's points in the order they run. A study over max_points_without_force points
 /// needs `force`; none may exceed max_points. Throws InputError.
 Study make_study(StudySource source, bool force);
 
 /// The point's scenario: the base scenario with the point's values, named
-/// "<study>/<point>". Throws InputError (from the scenario loader) for a bad value.
-Scenario point_scenario(const Study& study, const StudyPoint& point);
+/// "<study>/<point>". A frequency-response point's run lasts its cap of cycles (the
+/// budget checked is the worst case) with one sample per cycle, and its host starts at
+/// `host_start` if given (the previous point's final state) instead of the base
+/// scenario's host.z0_m and host.v0_m_s. Throws InputError (from the scenario loader) for
+/// a bad value.
+Scenario point_scenario(const Study& study, const StudyPoint& point, const std::optional<HostState>& host_start = {});
+
+/// The steady-state criterion of a frequency-response point.
+const SteadyStateCriterion& point_criterion(const Study& study, const StudyPoint& point);
 
 /// Builds every point's scenario and checks that each of the study's models can run it,
 /// as `pdamp run` does before it stores anything (plan_run: the run's budget, the hard
@@ -67,7 +92,15 @@ void validate_study(const Study& study, const std::optional<SnapshotSettings>& s
 /// key's values (compared as expanded), and the base scenario's resolved keys.
 std::vector<std::string> study_differences(const Study& stored, const Study& now);
 
+/// Throws InputError if the study runs frequency-response curves, which `command`
+/// (e.g. Slurm's job arrays, a task per point) does not support: a curve's points run in
+/// order, each from the previous one's final state.
+void refuse_frf_study(const Study& study, const std::string& command);
+
 /// "key = value, key = value" of a point.
 std::string describe_values(const StudyPoint& point);
+
+/// "hard up, curve 2, step 5 after point 11" of a frequency-response point ("" for another).
+std::string describe_curve(const StudyPoint& point);
 
 }  // namespace pdamp::study

@@ -12,9 +12,15 @@
 /// keys; every point's scenario is checked when the study is built (study.hpp).
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
+
+#include "pdamp/analysis/frf_response.hpp"
+#include "pdamp/scenario/ini.hpp"
+#include "pdamp/scenario/scenario.hpp"
 
 namespace pdamp::study {
 
@@ -41,12 +47,38 @@ struct Sweep {
   std::size_t points_up_to(std::size_t limit) const;
 };
 
-/// What a study file says (its base scenario is read by study.hpp).
+enum class FrfDirection { up, down, both };
+std::string_view to_string(FrfDirection direction);
+
+/// Where each point of a frequency-response curve starts.
+enum class FrfStart {
+  continuation,  ///< from the previous point's final state (the curve's first: the settled bed)
+  bed,           ///< every point from the settled bed
+};
+std::string_view to_string(FrfStart start);
+
+/// An `[frf]` or `[frf.NAME]` section: stepped-sine response curves (docs/studies.md).
+struct FrfSection {
+  std::string section;                          ///< "frf" or "frf.NAME"
+  ExcitationMode mode = ExcitationMode::force;  ///< force or base_motion
+  std::vector<std::string> levels;              ///< F0 (N) or Y (m), as written or expanded
+  std::vector<std::string> frequencies;         ///< Hz, ascending
+  FrfDirection direction = FrfDirection::up;
+  bool host_alone = false;  ///< adds one curve of the host without particles
+  FrfStart start = FrfStart::continuation;
+  SteadyStateCriterion criterion;
+  std::optional<StudyModels> models;                          ///< the section's own; default [study] models
+  std::vector<std::pair<std::string, std::string>> settings;  ///< scenario keys set on every point
+};
+
+/// What a study file says (its base scenario is read by study.hpp): sweeps or
+/// frequency-response sections, not both.
 struct StudyFile {
   std::string name;
   std::string scenario;  ///< the base scenario file as written, relative to the study file
   StudyModels models = StudyModels::soft;
   std::vector<Sweep> sweeps;
+  std::vector<FrfSection> frfs;
 };
 
 /// Parses a study file's text. `origin` names it in messages; `default_name` is the study's
@@ -57,6 +89,13 @@ StudyFile parse_study_file(const std::string& text, const std::string& origin, c
 /// A range's first and last values are its start and stop as written, the others are
 /// printed with 15 significant digits. Throws InputError naming `what`.
 std::vector<std::string> parse_sweep_values(const std::string& text, const std::string& what);
+
+/// An `[frf]` section from its header and its lines (frf_section.cpp). Throws InputError
+/// naming the line, the key and what is valid.
+FrfSection parse_frf_section(const ini::Section& header, const std::vector<ini::Entry>& entries);
+
+/// Why `key` cannot be set by a study, or nothing if it can (study_file.cpp).
+std::optional<std::string> unsettable_key(const std::string& key);
 
 /// Longest range and most points a study may have even with --force: beyond them the
 /// study would take memory and validation time without bound.

@@ -1,0 +1,280 @@
+/// Frequency-response studies ([frf], docs/studies.md): the section's keys and their
+/// mistakes, the curves a section expands into, and end to end: the host alone against its
+/// closed form, the state each point hands to the next, the same bits for any --jobs and
+/// after a SIGKILL mid-curve.
+#include <doctest/doctest.h>
+
+#include <csignal>
+#include <fstream>
+#include <thread>
+
+#include "pdamp/sim/frf_point.hpp"
+#include "pdamp/store/study_store.hpp"
+#include "pdamp/study/point_runner.hpp"
+#include "pdamp/study/study.hpp"
+#include "study_compare.hpp"
+#include "test_process.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using namespace pdamp::study;
+using namespace pdamp::test;
+
+namespace {
+
+void write(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file);
+  out << text;
+}
+
+std::string small() { return test::scenario_file("small").string(); }
+
+/// An [frf] study on small.ini with 20 spheres, hard model.
+std::string frf_study(const std::string& frf) {
+  return "[study]\nscenario = " + small() + "\nmodels = hard\n\n[frf]\nmode = force\nhost.z0_m = 0\n" +
+         "particles.count = 20\n" + frf;
+}
+
+Study study_of(const std::string& text) {
+  return make_study({"/tmp/frf.ini", text, small(), "[particles]\ncount = 20\n"}, false);
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+/// Every stored FRF metric but the wall time differs between two stores, bit for bit: the count.
+std::int64_t frf_metric_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
+  sqlite::Database d(a);
+  d.exec("ATTACH '" + b.string() + "' AS b");
+  std::string differs = "y.point IS NULL";
+  for (const char* column :
+       {"settled", "cycles_to_steady", "cycles_run", "amplitude_m", "amplitude_spread_m", "phase_rad",
+        "normalised_amplitude", "gamma", "impact_J_per_cycle", "friction_J_per_cycle", "viscous_J_per_cycle",
+        "loss_factor", "apparent_mass_kg", "equivalent_damping_N_s_m", "particle_mass_kg"}) {
+    differs += std::string(" OR x.") + column + " IS NOT y." + column;
+  }
+  sqlite::Statement q(d, "SELECT coalesce(sum(" + differs +
+                             "), -1) FROM main.study_frf_metrics x LEFT JOIN b.study_frf_metrics y USING (point)");
+  q.step();
+  return q.column_int(0);
+}
+
+}  // namespace
+
+TEST_CASE("[frf] sections: curves by model, level and direction, each point after the one before") {
+  const Study s = study_of(frf_study("levels = 0.05, 0.2\nfrequencies = 15, 19, 17\ndirection = both\n"
+                                     "host_alone = true\nmodels = both\nmax_cycles = 50\n"));
+  REQUIRE(s.file.frfs.size() == 1);
+  const FrfSection& f = s.file.frfs[0];
+  CHECK(f.frequencies == std::vector<std::string>{"15", "17", "19"});
+  CHECK(f.criterion.max_cycles == 50);
+  CHECK(f.criterion.consecutive_cycles == SteadyStateCriterion{}.consecutive_cycles);
+  // 2 models x 2 levels x 2 directions x 3 frequencies, and the host alone's 3.
+  REQUIRE(s.points.size() == 27);
+  CHECK(describe_curve(s.points[0]) == "soft up, curve 1, step 1 from the bed");
+  CHECK(describe_curve(s.points[1]) == "soft up, curve 1, step 2 after point 1");
+  CHECK(describe_curve(s.points[3]) == "soft down, curve 2, step 1 from the bed");
+  CHECK(s.points[3].frf->frequency_hz == "19");
+  CHECK(describe_curve(s.points[12]) == "hard up, curve 5, step 1 from the bed");
+  CHECK(describe_curve(s.points[26]) == "soft host alone up, curve 9, step 3 after point 26");
+  const Scenario last = point_scenario(s, s.points[26], HostState{0.25, -1.5});
+  CHECK(last.particles.count == 0);
+  CHECK(last.host.z0_m == 0.25);
+  CHECK(last.excitation.frequency_hz == 19.0);
+  CHECK(last.run.duration_s == doctest::Approx(60.0 / 19.0));
+  CHECK(last.run.sample_interval_s == doctest::Approx(1.0 / 19.0));
+  const Study bed = study_of(frf_study("levels = 0.05\nfrequencies = 15:17:3\nstart = bed\n"));
+  for (const auto& p : bed.points) CHECK(p.frf->previous == 0);
+}
+
+TEST_CASE("[frf] mistakes: one message naming the line, the key and what is valid") {
+  const std::string head = "[study]\nscenario = a.ini\nmodels = hard\n";
+  struct Bad {
+    std::string text, message;
+  };
+  for (const Bad& bad : std::vector<Bad>{
+           {head + "[frf]\nmode = free\nlevels = 1\nfrequencies = 10\n", "line 5: [frf] mode = 'free': must be force"},
+           {head + "[frf]\nmode = prescribed\nlevels = 1\nfrequencies = 10\n", "prescribed motion fixes the host"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 0, 10\n", "'0': each frequency (Hz) must be > 0"},
+           {head + "[frf]\nmode = force\nlevels = -1\nfrequencies = 10\n", "each level (F0 in N under a force"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 20:10:3\n", "the range is reversed"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10, 10.0\n", "the value 10.0 appears twice"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\ndirection = sideways\n",
+            "direction = 'sideways': must be up, down or both"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nstart = cold\n",
+            "start = 'cold': must be continue"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost_alone = yes\n",
+            "host_alone = 'yes': must be true or false"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nmax_cycles = 0\n",
+            "max_cycles = '0': must be a whole number of cycles from 1 to 100000"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nmin_cycles = 20\nmax_cycles = 10\n",
+            "max_cycles = 10 is below min_cycles = 20"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\namplitude_tolerance = 0\n",
+            "amplitude_tolerance = '0': must be a number > 0"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nlevel = 2\n",
+            "[frf] level is not an [frf] key (valid: mode, levels"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nexcitation.frequency_hz = 3\n",
+            "excitation.frequency_hz is set by [frf]"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost.z0_m = 0, 1\n",
+            "a grid of frequency responses is not supported"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost.zz = 1\n", "'host.zz' is not a scenario key"},
+           {head + "[frf]\nmode = force\nlevels = 1\n", "[frf] needs frequencies"},
+           {head + "[sweep]\nhost.z0_m = 1, 2\n[frf]\nmode = force\nlevels = 1\nfrequencies = 10\n",
+            "a study has [sweep] or [frf] sections, not both"},
+       }) {
+    CAPTURE(bad.text);
+    CHECK(error_of([&] { parse_study_file(bad.text, "test.ini", "t"); }).find(bad.message) != std::string::npos);
+  }
+}
+
+TEST_CASE("pdamp study run refuses a bad [frf] study with exit 2 and writes nothing; Slurm refuses [frf]") {
+  test::TempDir dir("frf-bad");
+  const auto db = dir / "runs.sqlite";
+  const auto file = dir / "frf.ini";
+  for (const auto& [text, message] : std::vector<std::pair<std::string, std::string>>{
+           {frf_study("levels = 0.1\nfrequencies = 10\nmode = base\n"), "[frf] mode is given twice"},
+           {frf_study("levels = 0.1\nfrequencies = 10, 20\nrun.max_steps = 1000\n"),
+            "excitation.force_N = 0.1, excitation.frequency_hz = 10): run.max_steps = 1000: observing the run"},
+       }) {
+    write(file, text);
+    const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(message) != std::string::npos);
+    CHECK(!std::filesystem::exists(db));
+  }
+  write(file, frf_study("levels = 0.1\nfrequencies = 10\n"));
+  const Result slurm = pdamp_cli({"study", "submit", file.string(), "--slurm", "--dry-run", "--db", db.string()}, dir);
+  CHECK(slurm.code == 2);
+  CHECK(slurm.err.find("study submit runs [sweep] studies only") != std::string::npos);
+  CHECK(!std::filesystem::exists(db));
+}
+
+TEST_CASE("an [frf] host-alone curve gives the closed-form amplitude, phase and loss factor at every point") {
+  test::TempDir dir("frf-host");
+  const auto db = dir / "runs.sqlite";
+  const auto file = dir / "host.ini";
+  write(dir / "base.ini", "[host]\nz0_m = 0\ndamping_N_s_m = 1\n[particles]\ncount = 0\n");
+  write(file,
+        "[study]\nscenario = base.ini\nmodels = hard\n[frf]\nmode = force\nlevels = 0.2\nfrequencies = 12, 17.8, "
+        "30\ndirection = both\namplitude_tolerance = 1e-10\nphase_tolerance_rad = 1e-10\n[frf.base]\nmode = base\n"
+        "levels = 0.001\nfrequencies = 12, 17.8, 30\namplitude_tolerance = 1e-10\nphase_tolerance_rad = 1e-10\n");
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--jobs", "2"}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(r.out.find("point  curve  model") != std::string::npos);
+  RunStore store(db, StoreAccess::read);
+  const Study s = stored_study(*StudyStore(store).study(1));
+  const auto points = StudyStore(store).frf_points(1);
+  REQUIRE(points.size() == 9);
+  for (const auto& p : points) {
+    CAPTURE(p.point);
+    REQUIRE(p.result);
+    const Scenario scenario = point_scenario(s, s.points.at(static_cast<std::size_t>(p.point - 1)));
+    const test::ClosedForm exact = test::host_alone(scenario);
+    const ResponseMetrics& m = p.result->metrics;
+    const double w = scenario.excitation.angular_frequency_rad_s();
+    CHECK(m.settled);
+    CHECK(m.amplitude_m == doctest::Approx(exact.amplitude_m).epsilon(1e-6));
+    CHECK(std::abs(m.phase_rad - exact.phase_rad) <= 1e-6);
+    CHECK(m.loss_factor == doctest::Approx(scenario.host.damping_N_s_m * w / scenario.host.stiffness_N_m).epsilon(1e-6));
+    CHECK(m.apparent_mass_kg == 0.0);
+  }
+}
+
+TEST_CASE("continuation: each point starts from the stored final state of the one before, bit for bit") {
+  test::TempDir dir("frf-continue");
+  const auto db = dir / "runs.sqlite";
+  const auto file = dir / "frf.ini";
+  write(file, frf_study("levels = 0.2\nfrequencies = 16, 18\nmax_cycles = 40\n"));
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  RunStore store(db, StoreAccess::read);
+  StudyStore studies(store);
+  const Study s = stored_study(*studies.study(1));
+  const auto end1 = studies.end_state(1, 1);
+  REQUIRE(end1);
+  // The second point's run started from the first's final state: its host and its spheres.
+  CHECK(count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = (SELECT run_id FROM study_frf_metrics "
+                       "WHERE point = 2)") == end1->state_id);
+  // The first point again in this process, from its bed: its final state is the stored one.
+  const Particles bed = store.load_initial_particles(
+      count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = " + std::to_string(end1->run_id)));
+  const Scenario first = point_scenario(s, s.points[0]);
+  auto engine = make_engine(Model::hard, first, bed);
+  const FrfPointOutcome one = run_frf_point(*engine, first, point_criterion(s, s.points[0]));
+  State stored{engine->observe(), store.load_initial_particles(end1->state_id)};
+  stored.observation.host = end1->host;
+  test::check_same_state(engine->state(), stored);
+  CHECK(engine->observe().t_s == end1->t_s);
+  // The second from that state gives the stored metrics.
+  const Scenario second = point_scenario(s, s.points[1], end1->host);
+  auto next = make_engine(Model::hard, second, stored.particles);
+  const FrfPointOutcome two = run_frf_point(*next, second, point_criterion(s, s.points[1]));
+  const auto rows = studies.frf_points(1);
+  CHECK(rows[0].result->metrics.amplitude_m == one.metrics.amplitude_m);
+  CHECK(rows[1].result->metrics.amplitude_m == two.metrics.amplitude_m);
+  CHECK(rows[1].result->metrics.apparent_mass_kg == two.metrics.apparent_mass_kg);
+  CHECK(rows[1].result->cycles_run == two.cycles_run);
+}
+
+TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKILL mid-curve and resuming") {
+  test::TempDir dir("frf-jobs");
+  const auto file = dir / "frf.ini";
+  write(file, frf_study("levels = 0.05, 0.2\nfrequencies = 15, 17, 19\ndirection = both\nhost_alone = true\n"
+                        "max_cycles = 60\n"));
+  std::map<int, std::filesystem::path> stores;
+  for (const int jobs : {1, 3}) {
+    stores[jobs] = dir / ("jobs" + std::to_string(jobs) + ".sqlite");
+    const Result r =
+        pdamp_cli({"study", "run", file.string(), "--db", stores[jobs].string(), "--jobs", std::to_string(jobs)}, dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+  }
+  CHECK(count_rows(stores[3], "SELECT count(*) FROM study_frf_metrics") == 15);
+  CHECK(frf_metric_differences(stores[1], stores[3]) == 0);
+  const auto [differing, compared] = sample_differences(stores[1], stores[3]);
+  CHECK(compared > 15 * 10);
+  CHECK(differing == 0);
+
+  // Killed with its workers once the first curve is under way: resumed, the same bits.
+  const auto killed = dir / "killed.sqlite";
+  {
+    Process study({"study", "run", file.string(), "--db", killed.string(), "--jobs", "2"}, dir, "study", Group::own);
+    for (int i = 0; i < 1200 && !(std::filesystem::exists(killed) &&
+                                  count_rows(killed, "SELECT count(*) FROM sqlite_schema WHERE name = 'study_frf'") &&
+                                  count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") >= 3);
+         ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    study.signal_group(SIGKILL);
+    CHECK(study.wait() == 128 + SIGKILL);
+  }
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 15);
+  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  CHECK(frf_metric_differences(stores[1], killed) == 0);
+  CHECK(sample_differences(stores[1], killed).first == 0);
+}
+
+TEST_CASE("pdamp study plot draws an [frf] study's response") {
+  test::TempDir dir("frf-plot");
+  const auto db = (dir / "runs.sqlite").string();
+  const auto file = dir / "frf.ini";
+  write(file, frf_study("levels = 0.05\nfrequencies = 15, 17\nhost_alone = true\nmax_cycles = 30\n"));
+  REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", db}, dir).code == 0);
+  const auto png = dir / "frf.png";
+  const Result r = pdamp_cli({"study", "plot", "1", "--db", db, "--out", png.string()}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(std::filesystem::file_size(png) > 10'000);
+  CHECK(pdamp_cli({"study", "plot", "1", "--db", db, "--metric", "psi_peak"}, dir).code == 2);
+}

@@ -6,6 +6,8 @@
 
 #include <csignal>
 #include <fstream>
+#include <limits>
+#include <numbers>
 #include <thread>
 
 #include "pdamp/sim/frf_point.hpp"
@@ -65,11 +67,19 @@ std::int64_t frf_metric_differences(const std::filesystem::path& a, const std::f
   return q.column_int(0);
 }
 
+/// Beds kept as a point's final state that no completed point refers to.
+std::int64_t orphan_end_states(const std::filesystem::path& db) {
+  return count_rows(db,
+                    "SELECT count(*) FROM initial_states WHERE settle_key LIKE 'frequency-response point end:%' "
+                    "AND state_id NOT IN (SELECT state_id FROM study_point_states)");
+}
+
 }  // namespace
 
 TEST_CASE("[frf] sections: curves by model, level and direction, each point after the one before") {
-  const Study s = study_of(frf_study("levels = 0.05, 0.2\nfrequencies = 15, 19, 17\ndirection = both\n"
-                                     "host_alone = true\nmodels = both\nmax_cycles = 50\n"));
+  const Study s =
+      study_of(frf_study("levels = 0.05, 0.2\nfrequencies = 15, 19, 17\ndirection = both\n"
+                         "host_alone = true\nmodels = both\nmax_cycles = 50\n"));
   REQUIRE(s.file.frfs.size() == 1);
   const FrfSection& f = s.file.frfs[0];
   CHECK(f.frequencies == std::vector<std::string>{"15", "17", "19"});
@@ -123,7 +133,8 @@ TEST_CASE("[frf] mistakes: one message naming the line, the key and what is vali
             "excitation.frequency_hz is set by [frf]"},
            {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost.z0_m = 0, 1\n",
             "a grid of frequency responses is not supported"},
-           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost.zz = 1\n", "'host.zz' is not a scenario key"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost.zz = 1\n",
+            "'host.zz' is not a scenario key"},
            {head + "[frf]\nmode = force\nlevels = 1\n", "[frf] needs frequencies"},
            {head + "[sweep]\nhost.z0_m = 1, 2\n[frf]\nmode = force\nlevels = 1\nfrequencies = 10\n",
             "a study has [sweep] or [frf] sections, not both"},
@@ -133,7 +144,7 @@ TEST_CASE("[frf] mistakes: one message naming the line, the key and what is vali
   }
 }
 
-TEST_CASE("pdamp study run refuses a bad [frf] study with exit 2 and writes nothing; Slurm refuses [frf]") {
+TEST_CASE("a bad [frf] study, --snapshots with [frf] and study submit of [frf] exit 2 and write nothing") {
   test::TempDir dir("frf-bad");
   const auto db = dir / "runs.sqlite";
   const auto file = dir / "frf.ini";
@@ -150,6 +161,10 @@ TEST_CASE("pdamp study run refuses a bad [frf] study with exit 2 and writes noth
     CHECK(!std::filesystem::exists(db));
   }
   write(file, frf_study("levels = 0.1\nfrequencies = 10\n"));
+  const Result snapshots = pdamp_cli({"study", "run", file.string(), "--snapshots", "0.01", "--db", db.string()}, dir);
+  CHECK(snapshots.code == 2);
+  CHECK(snapshots.err.find("[frf]: --snapshots is for [sweep] studies only") != std::string::npos);
+  CHECK(!std::filesystem::exists(db));
   const Result slurm = pdamp_cli({"study", "submit", file.string(), "--slurm", "--dry-run", "--db", db.string()}, dir);
   CHECK(slurm.code == 2);
   CHECK(slurm.err.find("study submit runs [sweep] studies only") != std::string::npos);
@@ -183,46 +198,113 @@ TEST_CASE("an [frf] host-alone curve gives the closed-form amplitude, phase and 
     CHECK(m.settled);
     CHECK(m.amplitude_m == doctest::Approx(exact.amplitude_m).epsilon(1e-6));
     CHECK(std::abs(m.phase_rad - exact.phase_rad) <= 1e-6);
-    CHECK(m.loss_factor == doctest::Approx(scenario.host.damping_N_s_m * w / scenario.host.stiffness_N_m).epsilon(1e-6));
+    CHECK(m.loss_factor ==
+          doctest::Approx(scenario.host.damping_N_s_m * w / scenario.host.stiffness_N_m).epsilon(1e-6));
     CHECK(m.apparent_mass_kg == 0.0);
   }
 }
 
 TEST_CASE("continuation: each point starts from the stored final state of the one before, bit for bit") {
-  test::TempDir dir("frf-continue");
+  for (const Model model : {Model::hard, Model::soft}) {
+    CAPTURE(to_string(model));
+    test::TempDir dir("frf-continue-" + std::string(to_string(model)));
+    const auto db = dir / "runs.sqlite";
+    const auto file = dir / "frf.ini";
+    // The soft model at its cap of 6 cycles a point, for time.
+    write(file, "[study]\nscenario = " + small() + "\nmodels = " + std::string(to_string(model)) +
+                    "\n\n[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.2\n"
+                    "frequencies = 16, 18\n" +
+                    (model == Model::hard ? "max_cycles = 40\n" : "max_cycles = 6\nmin_cycles = 2\n"));
+    const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    RunStore store(db, StoreAccess::read);
+    StudyStore studies(store);
+    const Study s = stored_study(*studies.study(1));
+    const auto end1 = studies.end_state(1, 1);
+    REQUIRE(end1);
+    // The second point's run started from the first's final state: its host and its spheres.
+    const std::int64_t run2 = count_rows(db, "SELECT run_id FROM study_frf_metrics WHERE point = 2");
+    CHECK(count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = " + std::to_string(run2)) == end1->state_id);
+    // The stored final state is the first point's last sample, and the second point's first
+    // sample (its t = 0) is that state again.
+    const RunResults one = store.results(end1->run_id), two = store.results(run2);
+    REQUIRE(!one.samples.empty());
+    REQUIRE(!two.samples.empty());
+    const Observation& last = one.samples.back().observation;
+    const Observation& first = two.samples.front().observation;
+    CHECK(last.t_s == end1->t_s);
+    CHECK(last.host.z_m == end1->host.z_m);
+    CHECK(last.host.v_m_s == end1->host.v_m_s);
+    CHECK(first.t_s == 0.0);
+    const Scenario second = point_scenario(s, s.points[1], end1->host);
+    if (model == Model::soft) {
+      CHECK(first.host.z_m == last.host.z_m);
+      CHECK(first.host.v_m_s == last.host.v_m_s);
+    } else {
+      // The hard engine's host is the closed form z_p(t) + u(t), u0 = z0 - z_p(0) rounded
+      // (model/host.hpp, HostTrajectory): at its start it gives z0 within a rounding of
+      // |z_p|, the forced amplitude, as after every impulse within a run.
+      const double forced_m = test::host_alone(second).amplitude_m;
+      const double w = second.excitation.angular_frequency_rad_s();
+      const double eps = std::numeric_limits<double>::epsilon();
+      CHECK(std::abs(first.host.z_m - last.host.z_m) <= 2 * eps * (std::abs(last.host.z_m) + forced_m));
+      CHECK(std::abs(first.host.v_m_s - last.host.v_m_s) <= 2 * eps * (std::abs(last.host.v_m_s) + w * forced_m));
+    }
+    // The excitation is continuous: F0 sin(w t) at the first point's end, after whole
+    // cycles, is zero within the rounding of w t (the second starts at sin 0 = 0).
+    const double w1 = 2 * std::numbers::pi * 16.0;
+    CHECK(std::abs(0.2 * std::sin(w1 * end1->t_s)) <=
+          0.2 * 4 * std::numeric_limits<double>::epsilon() * w1 * end1->t_s);
+    // The second point's engine holds every sphere where the first left it, bit for bit.
+    const Particles stored = store.load_initial_particles(end1->state_id);
+    auto next = make_engine(model, second, stored);
+    const State start = next->state();
+    CHECK(start.particles.position_m == stored.position_m);
+    CHECK(start.particles.velocity_m_s == stored.velocity_m_s);
+    CHECK(start.particles.angular_velocity_rad_s == stored.angular_velocity_rad_s);
+    CHECK(start.observation.host.z_m == first.host.z_m);
+    CHECK(start.observation.host.v_m_s == first.host.v_m_s);
+    if (model == Model::soft) continue;
+    // The first point again in this process, from its bed: its final state is the stored one.
+    const Particles bed = store.load_initial_particles(
+        count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = " + std::to_string(end1->run_id)));
+    const Scenario first_scenario = point_scenario(s, s.points[0]);
+    auto engine = make_engine(model, first_scenario, bed);
+    const FrfPointOutcome again = run_frf_point(*engine, first_scenario, point_criterion(s, s.points[0]));
+    State kept{engine->observe(), stored};
+    kept.observation.host = end1->host;
+    test::check_same_state(engine->state(), kept);
+    CHECK(engine->observe().t_s == end1->t_s);
+    // The second from that state gives the stored metrics.
+    auto from_kept = make_engine(model, second, kept.particles);
+    const FrfPointOutcome next_point = run_frf_point(*from_kept, second, point_criterion(s, s.points[1]));
+    const auto rows = studies.frf_points(1);
+    CHECK(rows[0].result->metrics.amplitude_m == again.metrics.amplitude_m);
+    CHECK(rows[1].result->metrics.amplitude_m == next_point.metrics.amplitude_m);
+    CHECK(rows[1].result->metrics.apparent_mass_kg == next_point.metrics.apparent_mass_kg);
+    CHECK(rows[1].result->cycles_run == next_point.cycles_run);
+  }
+}
+
+TEST_CASE("a point's final state and its completion are one transaction: refused, neither is stored") {
+  test::TempDir dir("frf-atomic");
   const auto db = dir / "runs.sqlite";
   const auto file = dir / "frf.ini";
-  write(file, frf_study("levels = 0.2\nfrequencies = 16, 18\nmax_cycles = 40\n"));
-  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
-  INFO(r.err);
-  REQUIRE(r.code == 0);
-  RunStore store(db, StoreAccess::read);
+  write(file, frf_study("levels = 0.2\nfrequencies = 16\nmax_cycles = 20\n"));
+  REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir).code == 0);
+  RunStore store(db);
   StudyStore studies(store);
-  const Study s = stored_study(*studies.study(1));
-  const auto end1 = studies.end_state(1, 1);
-  REQUIRE(end1);
-  // The second point's run started from the first's final state: its host and its spheres.
-  CHECK(count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = (SELECT run_id FROM study_frf_metrics "
-                       "WHERE point = 2)") == end1->state_id);
-  // The first point again in this process, from its bed: its final state is the stored one.
-  const Particles bed = store.load_initial_particles(
-      count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = " + std::to_string(end1->run_id)));
-  const Scenario first = point_scenario(s, s.points[0]);
-  auto engine = make_engine(Model::hard, first, bed);
-  const FrfPointOutcome one = run_frf_point(*engine, first, point_criterion(s, s.points[0]));
-  State stored{engine->observe(), store.load_initial_particles(end1->state_id)};
-  stored.observation.host = end1->host;
-  test::check_same_state(engine->state(), stored);
-  CHECK(engine->observe().t_s == end1->t_s);
-  // The second from that state gives the stored metrics.
-  const Scenario second = point_scenario(s, s.points[1], end1->host);
-  auto next = make_engine(Model::hard, second, stored.particles);
-  const FrfPointOutcome two = run_frf_point(*next, second, point_criterion(s, s.points[1]));
   const auto rows = studies.frf_points(1);
-  CHECK(rows[0].result->metrics.amplitude_m == one.metrics.amplitude_m);
-  CHECK(rows[1].result->metrics.amplitude_m == two.metrics.amplitude_m);
-  CHECK(rows[1].result->metrics.apparent_mass_kg == two.metrics.apparent_mass_kg);
-  CHECK(rows[1].result->cycles_run == two.cycles_run);
+  REQUIRE(rows.size() == 1);
+  const std::int64_t beds = count_rows(db, "SELECT count(*) FROM initial_states");
+  // As if another process had taken the point: its completion is refused, and the final
+  // state it carried is not left behind.
+  store.database().exec("DELETE FROM study_frf_metrics; DELETE FROM study_point_states;");
+  store.database().exec("UPDATE study_points SET status = 'interrupted'");
+  CHECK_THROWS_AS(studies.complete_frf_point(1, 1, 1, *rows[0].result, Particles(3), 0.0), RuntimeFailure);
+  CHECK(count_rows(db, "SELECT count(*) FROM initial_states") == beds);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_frf_metrics") == 0);
 }
 
 TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKILL mid-curve and resuming") {
@@ -248,9 +330,10 @@ TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKIL
   const auto killed = dir / "killed.sqlite";
   {
     Process study({"study", "run", file.string(), "--db", killed.string(), "--jobs", "2"}, dir, "study", Group::own);
-    for (int i = 0; i < 1200 && !(std::filesystem::exists(killed) &&
-                                  count_rows(killed, "SELECT count(*) FROM sqlite_schema WHERE name = 'study_frf'") &&
-                                  count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") >= 3);
+    for (int i = 0;
+         i < 1200 && !(std::filesystem::exists(killed) &&
+                       count_rows(killed, "SELECT count(*) FROM sqlite_schema WHERE name = 'study_frf'") &&
+                       count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") >= 3);
          ++i) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
@@ -258,11 +341,14 @@ TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKIL
     CHECK(study.wait() == 128 + SIGKILL);
   }
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 15);
+  CHECK(orphan_end_states(killed) == 0);
   const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
   CHECK(frf_metric_differences(stores[1], killed) == 0);
   CHECK(sample_differences(stores[1], killed).first == 0);
+  CHECK(orphan_end_states(killed) == 0);
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_point_states") == 15);
 }
 
 TEST_CASE("pdamp study plot draws an [frf] study's response") {

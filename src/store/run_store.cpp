@@ -292,37 +292,41 @@ std::optional<StoredInitialState> RunStore::find_initial_state(const std::string
   return StoredInitialState{id, load_initial_particles(id), query.column_double(1)};
 }
 
+std::int64_t insert_initial_state(sqlite::Database& db, const std::string& settle_key, const Particles& p,
+                                  double settle_time_s, double kinetic_J, double wall_time_s) {
+  // Another process may have settled the same bed meanwhile: the first one stays.
+  sqlite::Statement existing(db, "SELECT state_id FROM initial_states WHERE settle_key = ?");
+  existing.bind(1, settle_key);
+  if (existing.step()) return existing.column_int(0);
+  sqlite::Statement state(db,
+                          "INSERT INTO initial_states (settle_key, n_particles, settle_time_s, kinetic_J, "
+                          "wall_time_s, created_at) VALUES (?, ?, ?, ?, ?, ?)");
+  state.bind(1, settle_key)
+      .bind(2, static_cast<std::int64_t>(p.size()))
+      .bind(3, settle_time_s)
+      .bind(4, kinetic_J)
+      .bind(5, wall_time_s)
+      .bind(6, utc_now_iso8601());
+  state.run();
+  const std::int64_t id = db.last_insert_rowid();
+  sqlite::Statement particle(db, "INSERT INTO initial_particles VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  for (Eigen::Index i = 0; i < p.size(); ++i) {
+    particle.bind(1, id).bind(2, static_cast<std::int64_t>(i));
+    for (int c = 0; c < 3; ++c) {
+      particle.bind(3 + c, p.position_m(c, i))
+          .bind(6 + c, p.velocity_m_s(c, i))
+          .bind(9 + c, p.angular_velocity_rad_s(c, i));
+    }
+    particle.bind(12, p.radius_m[i]).bind(13, p.mass_kg[i]);
+    particle.run();
+  }
+  return id;
+}
+
 std::int64_t RunStore::save_initial_state(const std::string& settle_key, const Particles& p, double settle_time_s,
                                           double kinetic_J, double wall_time_s) {
-  return sqlite::write_transaction(*db_, [&] {
-    // Another process may have settled the same bed meanwhile: the first one stays.
-    sqlite::Statement existing(*db_, "SELECT state_id FROM initial_states WHERE settle_key = ?");
-    existing.bind(1, settle_key);
-    if (existing.step()) return existing.column_int(0);
-    sqlite::Statement state(*db_,
-                            "INSERT INTO initial_states (settle_key, n_particles, settle_time_s, kinetic_J, "
-                            "wall_time_s, created_at) VALUES (?, ?, ?, ?, ?, ?)");
-    state.bind(1, settle_key)
-        .bind(2, static_cast<std::int64_t>(p.size()))
-        .bind(3, settle_time_s)
-        .bind(4, kinetic_J)
-        .bind(5, wall_time_s)
-        .bind(6, utc_now_iso8601());
-    state.run();
-    const std::int64_t id = db_->last_insert_rowid();
-    sqlite::Statement particle(*db_, "INSERT INTO initial_particles VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
-    for (Eigen::Index i = 0; i < p.size(); ++i) {
-      particle.bind(1, id).bind(2, static_cast<std::int64_t>(i));
-      for (int c = 0; c < 3; ++c) {
-        particle.bind(3 + c, p.position_m(c, i))
-            .bind(6 + c, p.velocity_m_s(c, i))
-            .bind(9 + c, p.angular_velocity_rad_s(c, i));
-      }
-      particle.bind(12, p.radius_m[i]).bind(13, p.mass_kg[i]);
-      particle.run();
-    }
-    return id;
-  });
+  return sqlite::write_transaction(
+      *db_, [&] { return insert_initial_state(*db_, settle_key, p, settle_time_s, kinetic_J, wall_time_s); });
 }
 
 Particles RunStore::load_initial_particles(std::int64_t state_id) {

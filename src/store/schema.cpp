@@ -430,6 +430,7 @@ CREATE TABLE run_checkpoints (
   written_at      TEXT NOT NULL,                       -- ISO 8601, UTC
   state           BLOB NOT NULL                        -- the run loop's and the engine's state (docs/checkpoints.md)
 ) STRICT;
+)sql";
 
 /// Frequency-response studies ([frf]): each point's place on its curve, its response
 /// metrics, and its final state, which the next point of its curve starts from (the
@@ -500,10 +501,10 @@ FROM study_points p JOIN study_frf_points f ON f.study_id = p.study_id AND f.poi
 LEFT JOIN study_frf_metrics m ON m.study_id = p.study_id AND m.point = p.point;
 )sql";
 
-constexpr std::array<std::string_view, 11> all{
-    v1_runs_samples_cycles, v2_run_statistics, v3_initial_states, v4_comparisons,      v5_solid_fraction,
-    v6_run_ids_never_reused, v7_run_snapshots, v8_studies,        v9_study_jobs,       v10_run_checkpoints,
-    v11_frf_studies};
+constexpr std::array<std::string_view, 11> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
+                                               v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused,
+                                               v7_run_snapshots,       v8_studies,        v9_study_jobs,
+                                               v10_run_checkpoints,    v11_frf_studies};
 
 }  // namespace
 

@@ -305,8 +305,12 @@ void StudyStore::complete_point(std::int64_t study_id, int point, int attempt, c
   });
 }
 
-void StudyStore::complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& r) {
-  sqlite::write_transaction(db(), [&] {
+std::int64_t StudyStore::complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& r,
+                                            const Particles& end_spheres, double kinetic_J) {
+  return sqlite::write_transaction(db(), [&] {
+    const std::int64_t state_id =
+        insert_initial_state(db(), "frequency-response point end: run " + std::to_string(r.run_id), end_spheres,
+                             r.end.t_s, kinetic_J, r.wall_time_s);
     const ResponseMetrics& m = r.metrics;
     sqlite::Statement metrics(
         db(),
@@ -335,7 +339,7 @@ void StudyStore::complete_frf_point(std::int64_t study_id, int point, int attemp
     sqlite::Statement state(db(),
                             "INSERT INTO study_point_states (study_id, point, run_id, state_id, t_s, host_z_m, "
                             "host_v_m_s) VALUES (?, ?, ?, ?, ?, ?, ?)");
-    state.bind(1, study_id).bind(2, point).bind(3, r.run_id).bind(4, r.end.state_id).bind(5, r.end.t_s);
+    state.bind(1, study_id).bind(2, point).bind(3, r.run_id).bind(4, state_id).bind(5, r.end.t_s);
     state.bind(6, r.end.host.z_m).bind(7, r.end.host.v_m_s).run();
     sqlite::Statement done(db(), with_now("UPDATE study_points SET status = 'completed', message = '', "
                                           "lease_host = NULL, lease_pid = NULL, lease_start = NULL, ended_at = ",
@@ -345,6 +349,7 @@ void StudyStore::complete_frf_point(std::int64_t study_id, int point, int attemp
       throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) + " attempt " +
                            std::to_string(attempt) + " is no longer running here; its results are not counted");
     }
+    return state_id;
   });
 }
 

@@ -18,8 +18,8 @@ constexpr std::array<std::pair<FrfStart, std::string_view>, 2> start_names{
 
 /// Keys [frf] sets itself on every point, which a section may not set.
 constexpr std::array<std::string_view, 6> keys_set_by_frf{"excitation.mode",        "excitation.force_N",
-                                                          "excitation.amplitude_m",  "excitation.frequency_hz",
-                                                          "run.duration_s",          "run.sample_interval_s"};
+                                                          "excitation.amplitude_m", "excitation.frequency_hz",
+                                                          "run.duration_s",         "run.sample_interval_s"};
 
 constexpr std::string_view frf_keys =
     "mode, levels, frequencies, direction, host_alone, start, models, consecutive_cycles, amplitude_tolerance, "
@@ -72,8 +72,9 @@ class FrfParser {
       frf_.levels = positive_values(v, "each level (F0 in N under a force, Y in m under base motion) must be > 0");
     } else if (entry.key == "frequencies") {
       frf_.frequencies = positive_values(v, "each frequency (Hz) must be > 0");
-      std::stable_sort(frf_.frequencies.begin(), frf_.frequencies.end(),
-                       [](const std::string& a, const std::string& b) { return *finite_number(a) < *finite_number(b); });
+      std::stable_sort(
+          frf_.frequencies.begin(), frf_.frequencies.end(),
+          [](const std::string& a, const std::string& b) { return *finite_number(a) < *finite_number(b); });
     } else if (entry.key == "direction") {
       frf_.direction = choice(direction_names, v, "up, down or both");
     } else if (entry.key == "start") {
@@ -162,8 +163,9 @@ class FrfParser {
   void scenario_key(const std::string& key, const std::string& value) {
     if (key.find('.') == std::string::npos) fail("is not an [frf] key (valid: " + std::string(frf_keys) + ")");
     if (std::find(keys_set_by_frf.begin(), keys_set_by_frf.end(), key) != keys_set_by_frf.end()) {
-      fail("is set by [frf] on every point (mode, levels, frequencies, and the steady-state keys for the run's "
-           "length)");
+      fail(
+          "is set by [frf] on every point (mode, levels, frequencies, and the steady-state keys for the run's "
+          "length)");
     }
     if (const auto why = unsettable_key(key)) fail("is refused: " + *why);
     if (value.find(',') != std::string::npos) {

@@ -31,6 +31,7 @@ struct PointRuns {
   std::vector<StoredRun> runs;
   std::optional<std::int64_t> comparison_id;
   std::optional<FrfPointResult> frf;  ///< a completed frequency-response point's
+  Particles frf_end;                  ///< and its spheres at the end
 };
 
 double kinetic_energy_J(const Particles& p) {
@@ -136,15 +137,13 @@ class PointExecution {
     const StoredRun& run = result.runs.back();
     if (run.outcome.status != RunStatus::completed) return result;
     const State& end = frf_run.final_state;
-    const std::int64_t state_id =
-        store_->save_initial_state("frequency-response point end: run " + std::to_string(run.run_id), end.particles,
-                                   end.observation.t_s, kinetic_energy_J(end.particles), run.outcome.wall_time_s);
     result.frf = FrfPointResult{run.run_id,
                                 frf_run.point.metrics,
                                 frf_run.point.cycles_run,
                                 end.particles.total_mass_kg(),
                                 run.outcome.wall_time_s,
-                                {run.run_id, state_id, end.observation.t_s, end.observation.host}};
+                                {run.run_id, 0, end.observation.t_s, end.observation.host}};
+    result.frf_end = end.particles;
     return result;
   }
 
@@ -173,7 +172,7 @@ PointResult finish(StudyStore& studies, std::int64_t study_id, int point, int at
     run_ids.push_back(run.run_id);
   }
   if (result.frf) {
-    studies.complete_frf_point(study_id, point, attempt, *result.frf);
+    studies.complete_frf_point(study_id, point, attempt, *result.frf, result.frf_end, kinetic_energy_J(result.frf_end));
     return {PointStatus::completed, attempt, ""};
   }
   studies.complete_point(study_id, point, attempt, run_ids, result.comparison_id);

@@ -285,6 +285,12 @@ std::string describe_values(const StudyPoint& point) {
 }
 
 void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots) {
+  if (snapshots && !study.file.frfs.empty()) {
+    throw InputError(study.source.study_path.string() + ": [" + study.file.frfs.front().section +
+                     "]: --snapshots is for [sweep] studies only: a frequency-response point advances a whole "
+                     "excitation cycle at a time, with no observation grid to take snapshots on; run the study "
+                     "without --snapshots (or one point's scenario with 'pdamp run --snapshots')");
+  }
   const std::vector<Model> models = models_of(study.file.models);
   for (const auto& point : study.points) {
     try {

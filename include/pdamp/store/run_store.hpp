@@ -177,6 +177,11 @@ struct StoreOptions {
 /// One connection to a store: one per thread (studies run many points in parallel, from
 /// threads and processes, into one file). Every write is a short transaction, retried
 /// while others hold the lock (StoreOptions::busy_limit).
+/// save_initial_state's rows written inside the caller's write transaction on `db`, so
+/// that a bed can be stored together with what refers to it.
+std::int64_t insert_initial_state(sqlite::Database& db, const std::string& settle_key, const Particles& particles,
+                                  double settle_time_s, double kinetic_J, double wall_time_s);
+
 class RunStore {
  public:
   /// Opens or creates the store and migrates it to the current schema. The file is
@@ -204,6 +209,8 @@ class RunStore {
 
   /// The bed stored under `settle_key`, if any.
   std::optional<StoredInitialState> find_initial_state(const std::string& settle_key);
+  /// Stores a bed under `settle_key` (or keeps the one another process stored under it
+  /// meanwhile) in a transaction of its own; returns its state_id.
   std::int64_t save_initial_state(const std::string& settle_key, const Particles& particles, double settle_time_s,
                                   double kinetic_J, double wall_time_s);
   Particles load_initial_particles(std::int64_t state_id);

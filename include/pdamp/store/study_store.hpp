@@ -167,8 +167,12 @@ class StudyStore {
   /// and cycles, and the comparison of the two models if there is one.
   void complete_point(std::int64_t study_id, int point, int attempt, const std::vector<std::int64_t>& run_ids,
                       std::optional<std::int64_t> comparison_id);
-  /// Completes a frequency-response point's attempt with its metrics and final state.
-  void complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& result);
+  /// Completes a frequency-response point's attempt with its metrics and final state: its
+  /// spheres (`end_spheres`, of kinetic energy `kinetic_J`) stored as a bed in the same
+  /// transaction, so that a process killed on the way leaves neither; `result.end.state_id`
+  /// is ignored. Returns the bed's state_id.
+  std::int64_t complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& result,
+                                  const Particles& end_spheres, double kinetic_J);
   /// Ends the point's attempt as failed or interrupted with a message.
   void end_point(std::int64_t study_id, int point, int attempt, PointStatus status, const std::string& message);
   /// A point still running under `lease`, whose process is gone, ends as `status` (failed

@@ -442,7 +442,7 @@ std::vector<std::vector<std::string>> store_commands(const std::filesystem::path
 
 }  // namespace
 
-TEST_CASE("pdamp delete removes runs with all their rows; their ids are not used again") {
+TEST_CASE("pdamp delete removes runs with all their rows, and their ids are not used again") {
   test::TempDir dir("cli-delete");
   const auto db = dir / "runs.sqlite";
   store_host_run(dir, db);

@@ -56,7 +56,7 @@ struct FakeClock {
 
 }  // namespace
 
-TEST_CASE("progress on a terminal: one line redrawn with percent and time left; messages on lines of their own") {
+TEST_CASE("progress on a terminal: one line redrawn with percent and time left, messages on lines of their own") {
   FakeClock time;
   std::ostringstream out;
   Progress progress(out, true, time.clock());

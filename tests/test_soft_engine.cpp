@@ -108,7 +108,7 @@ Totals totals(const SoftEngine& engine) {
 
 }  // namespace
 
-TEST_CASE("binary collisions conserve momentum and angular momentum; the energy lost is what the books say") {
+TEST_CASE("binary collisions conserve momentum and angular momentum, and the energy lost is what the books say") {
   struct Case {
     const char* name;
     Eigen::Vector3d offset, spin;

@@ -29,6 +29,7 @@ struct CycleRecord {
   double psi_friction = 0.0;
   double psi_viscous = 0.0;
   double max_host_kinetic_J = 0.0;
+  bool operator==(const CycleRecord&) const = default;
 };
 
 class CycleAnalyzer {

@@ -25,6 +25,8 @@ struct EnergyLedger {
 
   bool host_counts = true;  ///< false for a prescribed-motion host, whose energy is not part of E
 
+  bool operator==(const EnergyLedger&) const = default;
+
   double stored_J() const {
     const double host = host_counts ? host_kinetic_J + spring_potential_J : 0.0;
     return particle_translational_J + particle_rotational_J + gravitational_potential_J + contact_elastic_J + host;

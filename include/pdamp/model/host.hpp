@@ -22,6 +22,7 @@ namespace pdamp {
 struct HostState {
   double z_m = 0.0;
   double v_m_s = 0.0;
+  bool operator==(const HostState&) const = default;
 };
 
 class HostModel {

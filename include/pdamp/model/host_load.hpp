@@ -20,6 +20,7 @@ struct HostLoadIntegrals {
   double own_N_s = 0.0;
   double z_m_s = 0.0, z_sin_m_s = 0.0, z_cos_m_s = 0.0;
 
+  bool operator==(const HostLoadIntegrals&) const = default;
   HostLoadIntegrals operator-(const HostLoadIntegrals& earlier) const {
     return {particles_N_s - earlier.particles_N_s,
             particles_sin_N_s - earlier.particles_sin_N_s,

@@ -14,6 +14,7 @@ struct EngineCounters {
   std::int64_t steps = 0;     ///< time steps taken (soft engine), cumulative
   std::int64_t events = 0;    ///< collisions processed (hard engine), cumulative
   std::int64_t contacts = 0;  ///< contacts open at this instant
+  bool operator==(const EngineCounters&) const = default;
 };
 
 /// A cheap look at an engine: host, energy ledger, the host's load integrals, counters.
@@ -24,6 +25,7 @@ struct Observation {
   EnergyLedger energy;
   HostLoadIntegrals host_load;  ///< cumulative since t = 0, integrated exactly by the engine
   EngineCounters counters;
+  bool operator==(const Observation&) const = default;
 };
 
 /// The full state: an observation plus every particle. Another engine can start from it.

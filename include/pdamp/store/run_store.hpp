@@ -45,6 +45,7 @@ struct RunStart {
 struct SampleRecord {
   Observation observation;
   double energy_balance_rel_err = 0.0;
+  bool operator==(const SampleRecord&) const = default;
 };
 
 /// A settled bed kept for other runs (and the other engine) to start from.

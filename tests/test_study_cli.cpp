@@ -31,9 +31,10 @@ std::string study_text(const std::string& models, const std::string& sweep) {
   return "[study]\nscenario = " + small() + "\nmodels = " + models + "\n\n[sweep]\n" + sweep;
 }
 
-/// Waits (up to a minute) until the store says `sql` is true.
+/// Polls until `sql` holds: up to five minutes (the sanitizer build on a loaded machine did
+/// not get a point under way within one); a pass returns at once.
 bool wait_until(const std::filesystem::path& db, const std::string& sql) {
-  for (int i = 0; i < 1200; ++i) {
+  for (int i = 0; i < 6000; ++i) {
     if (std::filesystem::exists(db) &&
         count_rows(db, "SELECT count(*) FROM sqlite_schema WHERE name = 'study_points'") && count_rows(db, sql) != 0) {
       return true;

@@ -139,10 +139,10 @@ std::int64_t differing_rows(const std::filesystem::path& db, std::int64_t a, std
     sqlite::Database d(db);
     sqlite::Statement names(d, "SELECT name FROM pragma_table_info(?) WHERE name != 'run_id' ORDER BY cid");
     names.bind(1, table);
-    while (names.step()) columns += (columns.empty() ? "" : ", ") + names.column_text(0);
+    while (names.step()) columns.append(columns.empty() ? "" : ", ").append(names.column_text(0));
     for (const auto& [x, y] : {std::pair{a, b}, std::pair{b, a}}) {
-      // Appended piece by piece: GCC 12's LTO warns (-Wstringop-overflow, a false positive)
-      // on the one long chain of operator+.
+      // Appended piece by piece, here and above: GCC 12's LTO warns (-Wstringop-overflow, a
+      // false positive) on operator+ of these strings.
       const std::string rows_of = "SELECT " + columns + " FROM " + table + " WHERE run_id = ";
       std::string sql = "SELECT count(*) FROM (";
       sql.append(rows_of).append(std::to_string(x)).append(" EXCEPT ").append(rows_of).append(std::to_string(y));

@@ -205,9 +205,12 @@ TEST_CASE("a study gives the same bits for any --jobs: every sample of every run
 namespace {
 
 /// Six points of small.ini's soft model, a quarter of a second each, one shared bed.
+/// Six points of about a second each on an idle machine: a point stores its samples every
+/// 0.25 s of wall time, so the tests below see one under way (at 0.25 s of simulated time a
+/// point ran in about 0.4 s and was often seen only completed).
 std::filesystem::path six_points(const test::TempDir& dir) {
   const auto file = dir / "six.ini";
-  write(file, study_text("soft", "host.damping_N_s_m = 0.1:0.6:6\nrun.duration_s = 0.25\n"));
+  write(file, study_text("soft", "host.damping_N_s_m = 0.1:0.6:6\nrun.duration_s = 0.6\n"));
   return file;
 }
 
@@ -263,7 +266,7 @@ TEST_CASE("a study killed mid-run loses only its points in progress and resumes 
   CHECK(count_rows(killed,
                    "SELECT count(*) FROM runs WHERE status = 'interrupted' AND message LIKE '%ended before%'") >= 1);
   const auto [differing, compared] = sample_differences(reference, killed);
-  CHECK(compared == 6 * 501);
+  CHECK(compared == 6 * 1201);  // 0.6 s sampled every 0.5 ms
   CHECK(differing == 0);
   CHECK(metric_differences(reference, killed) == 0);
 }

@@ -128,8 +128,7 @@ namespace {
 using test::pdamp_cli;
 using test::Process;
 using test::Result;
-
-std::string small() { return test::scenario_file("small").string(); }
+using test::small;
 
 /// The rows of two runs that differ (samples and cycles, every column but the run's id).
 std::int64_t differing_rows(const std::filesystem::path& db, std::int64_t a, std::int64_t b) {

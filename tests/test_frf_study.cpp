@@ -24,13 +24,6 @@ using namespace pdamp::test;
 
 namespace {
 
-void write(const std::filesystem::path& file, const std::string& text) {
-  std::ofstream out(file);
-  out << text;
-}
-
-std::string small() { return test::scenario_file("small").string(); }
-
 /// An [frf] study on small.ini with 20 spheres, hard model.
 std::string frf_study(const std::string& frf) {
   return "[study]\nscenario = " + small() + "\nmodels = hard\n\n[frf]\nmode = force\nhost.z0_m = 0\n" +
@@ -153,14 +146,14 @@ TEST_CASE("a bad [frf] study, --snapshots with [frf] and study submit of [frf] e
            {frf_study("levels = 0.1\nfrequencies = 10, 20\nrun.max_steps = 1000\n"),
             "excitation.force_N = 0.1, excitation.frequency_hz = 10): run.max_steps = 1000: observing the run"},
        }) {
-    write(file, text);
+    write_file(file, text);
     const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
     INFO(r.err);
     CHECK(r.code == 2);
     CHECK(r.err.find(message) != std::string::npos);
     CHECK(!std::filesystem::exists(db));
   }
-  write(file, frf_study("levels = 0.1\nfrequencies = 10\n"));
+  write_file(file, frf_study("levels = 0.1\nfrequencies = 10\n"));
   const Result snapshots = pdamp_cli({"study", "run", file.string(), "--snapshots", "0.01", "--db", db.string()}, dir);
   CHECK(snapshots.code == 2);
   CHECK(snapshots.err.find("[frf]: --snapshots is for [sweep] studies only") != std::string::npos);
@@ -175,11 +168,11 @@ TEST_CASE("an [frf] host-alone curve gives the closed-form amplitude, phase and 
   test::TempDir dir("frf-host");
   const auto db = dir / "runs.sqlite";
   const auto file = dir / "host.ini";
-  write(dir / "base.ini", "[host]\nz0_m = 0\ndamping_N_s_m = 1\n[particles]\ncount = 0\n");
-  write(file,
-        "[study]\nscenario = base.ini\nmodels = hard\n[frf]\nmode = force\nlevels = 0.2\nfrequencies = 12, 17.8, "
-        "30\ndirection = both\namplitude_tolerance = 1e-10\nphase_tolerance_rad = 1e-10\n[frf.base]\nmode = base\n"
-        "levels = 0.001\nfrequencies = 12, 17.8, 30\namplitude_tolerance = 1e-10\nphase_tolerance_rad = 1e-10\n");
+  write_file(dir / "base.ini", "[host]\nz0_m = 0\ndamping_N_s_m = 1\n[particles]\ncount = 0\n");
+  write_file(file,
+             "[study]\nscenario = base.ini\nmodels = hard\n[frf]\nmode = force\nlevels = 0.2\nfrequencies = 12, 17.8, "
+             "30\ndirection = both\namplitude_tolerance = 1e-10\nphase_tolerance_rad = 1e-10\n[frf.base]\nmode = base\n"
+             "levels = 0.001\nfrequencies = 12, 17.8, 30\namplitude_tolerance = 1e-10\nphase_tolerance_rad = 1e-10\n");
   const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--jobs", "2"}, dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
@@ -211,10 +204,10 @@ TEST_CASE("continuation: each point starts from the stored final state of the on
     const auto db = dir / "runs.sqlite";
     const auto file = dir / "frf.ini";
     // The soft model at its cap of 6 cycles a point, for time.
-    write(file, "[study]\nscenario = " + small() + "\nmodels = " + std::string(to_string(model)) +
-                    "\n\n[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.2\n"
-                    "frequencies = 16, 18\n" +
-                    (model == Model::hard ? "max_cycles = 40\n" : "max_cycles = 6\nmin_cycles = 2\n"));
+    write_file(file, "[study]\nscenario = " + small() + "\nmodels = " + std::string(to_string(model)) +
+                         "\n\n[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.2\n"
+                         "frequencies = 16, 18\n" +
+                         (model == Model::hard ? "max_cycles = 40\n" : "max_cycles = 6\nmin_cycles = 2\n"));
     const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
     INFO(r.err);
     REQUIRE(r.code == 0);
@@ -291,7 +284,7 @@ TEST_CASE("a point's final state and its completion are one transaction: refused
   test::TempDir dir("frf-atomic");
   const auto db = dir / "runs.sqlite";
   const auto file = dir / "frf.ini";
-  write(file, frf_study("levels = 0.2\nfrequencies = 16\nmax_cycles = 20\n"));
+  write_file(file, frf_study("levels = 0.2\nfrequencies = 16\nmax_cycles = 20\n"));
   REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir).code == 0);
   RunStore store(db);
   StudyStore studies(store);
@@ -310,8 +303,8 @@ TEST_CASE("a point's final state and its completion are one transaction: refused
 TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKILL mid-curve and resuming") {
   test::TempDir dir("frf-jobs");
   const auto file = dir / "frf.ini";
-  write(file, frf_study("levels = 0.05, 0.2\nfrequencies = 15, 17, 19\ndirection = both\nhost_alone = true\n"
-                        "max_cycles = 60\n"));
+  write_file(file, frf_study("levels = 0.05, 0.2\nfrequencies = 15, 17, 19\ndirection = both\nhost_alone = true\n"
+                             "max_cycles = 60\n"));
   std::map<int, std::filesystem::path> stores;
   for (const int jobs : {1, 3}) {
     stores[jobs] = dir / ("jobs" + std::to_string(jobs) + ".sqlite");
@@ -355,7 +348,7 @@ TEST_CASE("pdamp study plot draws an [frf] study's response") {
   test::TempDir dir("frf-plot");
   const auto db = (dir / "runs.sqlite").string();
   const auto file = dir / "frf.ini";
-  write(file, frf_study("levels = 0.05\nfrequencies = 15, 17\nhost_alone = true\nmax_cycles = 30\n"));
+  write_file(file, frf_study("levels = 0.05\nfrequencies = 15, 17\nhost_alone = true\nmax_cycles = 30\n"));
   REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", db}, dir).code == 0);
   const auto png = dir / "frf.png";
   const Result r = pdamp_cli({"study", "plot", "1", "--db", db, "--out", png.string()}, dir);

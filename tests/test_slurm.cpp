@@ -219,16 +219,14 @@ TEST_CASE("collect merges every table a shard's point has, and leaves the study'
 
 namespace {
 
-void write(const std::filesystem::path& file, const std::string& text) { std::ofstream(file) << text; }
-
 /// A study of small.ini's hard model, `points` host dampings, in a store of its own.
 struct ShardedStudy {
   ShardedStudy(const test::TempDir& dir, const std::string& name, int points, const std::string& store_name)
       : db(dir / store_name), store(db) {
     const auto file = dir / (name + ".ini");
-    write(file, "[study]\nname = " + name + "\nscenario = " + test::scenario_file("small").string() +
-                    "\nmodels = hard\n[sweep]\nhost.damping_N_s_m = 0.1:0.4:" + std::to_string(points) +
-                    "\nrun.duration_s = 0.05\n");
+    test::write_file(file, "[study]\nname = " + name + "\nscenario = " + test::small() +
+                               "\nmodels = hard\n[sweep]\nhost.damping_N_s_m = 0.1:0.4:" + std::to_string(points) +
+                               "\nrun.duration_s = 0.05\n");
     const study::Study study = study::make_study(study::read_study_source(file), false);
     id = study::find_or_create_study(store, study);
     record = *StudyStore(store).study(id);

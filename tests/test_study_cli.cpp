@@ -19,13 +19,6 @@ using namespace pdamp::test;
 
 namespace {
 
-void write(const std::filesystem::path& file, const std::string& text) {
-  std::ofstream out(file);
-  out << text;
-}
-
-std::string small() { return test::scenario_file("small").string(); }
-
 /// A study file on small.ini.
 std::string study_text(const std::string& models, const std::string& sweep) {
   return "[study]\nscenario = " + small() + "\nmodels = " + models + "\n\n[sweep]\n" + sweep;
@@ -88,7 +81,7 @@ TEST_CASE("a bad study exits with code 2 and one message naming the problem, and
   for (const Case& c : cases) {
     CAPTURE(c.name);
     const auto file = dir / "study.ini";
-    write(file, c.text);
+    write_file(file, c.text);
     std::vector<std::string> args{"study", "run", file.string(), "--db", db.string()};
     if (!c.extra.empty() && c.extra[0] == "absent") {
       args[2] = (dir / "absent.ini").string();
@@ -107,7 +100,7 @@ TEST_CASE("a bad study exits with code 2 and one message naming the problem, and
   CHECK(directory.err.find("is a directory, not a regular file") != std::string::npos);
   CHECK(!std::filesystem::exists(db));
   // --force lifts the size limit (the host alone runs 1,200 points quickly; validation only here).
-  write(dir / "study.ini", study_text("hard", grid));
+  write_file(dir / "study.ini", study_text("hard", grid));
   CHECK(pdamp_cli({"study", "run", (dir / "study.ini").string(), "--db", db.string(), "--jobs", "0", "--force"}, dir)
             .err.find("--jobs '0'") != std::string::npos);
 }
@@ -116,11 +109,11 @@ TEST_CASE("a study runs into the store, lists and shows, resumes without redoing
   test::TempDir dir("study-host");
   const auto db = (dir / "runs.sqlite").string();
   const auto base = dir / "base.ini";
-  write(base, "[particles]\ncount = 0\n[run]\nduration_s = 0.2\n");
+  write_file(base, "[particles]\ncount = 0\n[run]\nduration_s = 0.2\n");
   const auto file = dir / "host.ini";
-  write(file,
-        "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
-        "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.02\n");
+  write_file(file,
+             "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
+             "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.02\n");
   Result r = pdamp_cli({"study", "run", file.string(), "--db", db, "--jobs", "2"}, dir);
   INFO(r.err);
   REQUIRE(r.code == 0);
@@ -146,27 +139,27 @@ TEST_CASE("a study runs into the store, lists and shows, resumes without redoing
   CHECK(pdamp_cli({"study", "show", "7", "--db", db}, dir).code == 2);
 
   // Again, unchanged but reworded: nothing is run twice.
-  write(file,
-        "# the same study\n[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
-        "host.damping_N_s_m = 0.05, 0.1, 0.15, 0.2\nhost.z0_m = 0.01,0.02\n");
+  write_file(file,
+             "# the same study\n[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
+             "host.damping_N_s_m = 0.05, 0.1, 0.15, 0.2\nhost.z0_m = 0.01,0.02\n");
   r = pdamp_cli({"study", "run", file.string(), "--db", db}, dir);
   CHECK(r.code == 0);
   CHECK(count_rows(db, "SELECT count(*) FROM runs") == 8);
 
   // A changed value, or a changed base scenario, is refused with the difference named.
-  write(file,
-        "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
-        "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.03\n");
+  write_file(file,
+             "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
+             "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.03\n");
   r = pdamp_cli({"study", "run", file.string(), "--db", db}, dir);
   CHECK(r.code == 2);
   CHECK(r.err.find("study 'host alone' (study 1 in '" + db +
                    "') was made from another definition:\n"
                    "  [sweep] host.z0_m: '0.01, 0.03' now, '0.01, 0.02' stored") != std::string::npos);
   CHECK(pdamp_cli({"study", "resume", "1", "--db", db}, dir).code == 2);
-  write(file,
-        "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
-        "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.02\n");
-  write(base, "[particles]\ncount = 0\n[run]\nduration_s = 0.3\n");
+  write_file(file,
+             "[study]\nname = host alone\nscenario = base.ini\nmodels = hard\n[sweep]\n"
+             "host.damping_N_s_m = 0.05:0.2:4\nhost.z0_m = 0.01, 0.02\n");
+  write_file(base, "[particles]\ncount = 0\n[run]\nduration_s = 0.3\n");
   r = pdamp_cli({"study", "run", file.string(), "--db", db}, dir);
   CHECK(r.code == 2);
   CHECK(r.err.find("base scenario [run] duration_s: '0.3' now, '0.2' stored") != std::string::npos);
@@ -184,7 +177,8 @@ TEST_CASE("a study gives the same bits for any --jobs: every sample of every run
   test::TempDir dir("study-jobs");
   const auto file = dir / "both.ini";
   // Two beds (30 and 60 spheres), each run by both models at two host dampings.
-  write(file, study_text("both", "particles.count = 30, 60\nhost.damping_N_s_m = 0.1, 0.3\nrun.duration_s = 0.08\n"));
+  write_file(file,
+             study_text("both", "particles.count = 30, 60\nhost.damping_N_s_m = 0.1, 0.3\nrun.duration_s = 0.08\n"));
   std::map<int, std::filesystem::path> stores;
   for (const int jobs : {1, 3}) {
     stores[jobs] = dir / ("jobs" + std::to_string(jobs) + ".sqlite");
@@ -210,7 +204,7 @@ namespace {
 /// point ran in about 0.4 s and was often seen only completed).
 std::filesystem::path six_points(const test::TempDir& dir) {
   const auto file = dir / "six.ini";
-  write(file, study_text("soft", "host.damping_N_s_m = 0.1:0.6:6\nrun.duration_s = 0.6\n"));
+  write_file(file, study_text("soft", "host.damping_N_s_m = 0.1:0.6:6\nrun.duration_s = 0.6\n"));
   return file;
 }
 
@@ -308,7 +302,7 @@ TEST_CASE("SIGINT stops a study's workers promptly, and a crashed worker fails o
 TEST_CASE("pdamp study plot draws a metric against the swept key") {
   test::TempDir dir("study-plot");
   const auto file = dir / "plot.ini";
-  write(file, study_text("hard", "particles.count = 0\nhost.damping_N_s_m = 0.05:0.2:4\nrun.duration_s = 0.3\n"));
+  write_file(file, study_text("hard", "particles.count = 0\nhost.damping_N_s_m = 0.05:0.2:4\nrun.duration_s = 0.3\n"));
   const auto db = (dir / "runs.sqlite").string();
   REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", db}, dir).code == 0);
   const auto png = dir / "plot.png";

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -27,6 +28,10 @@ inline std::filesystem::path source_dir() { return PDAMP_SOURCE_DIR; }
 inline std::filesystem::path scenario_file(const std::string& name) {
   return source_dir() / "data" / "scenarios" / (name + ".ini");
 }
+/// data/scenarios/small.ini, as a study file names its base scenario.
+inline std::string small() { return scenario_file("small").string(); }
+
+inline void write_file(const std::filesystem::path& file, const std::string& text) { std::ofstream(file) << text; }
 
 /// The engine's statistic `name` (Engine::statistics); throws if it has none.
 inline std::int64_t statistic(const Engine& engine, const std::string& name) {

@@ -50,11 +50,11 @@ TEST_CASE_TEMPLATE("a run resumed from any of its checkpoints gives the same bit
     const Particles bed = placed(s);
     // Uninterrupted without checkpoints, and with one at every observation it can.
     MemoryRecorder plain, saved;
-    auto plain_engine = make_engine(M::model, s, bed);
+    auto plain_engine = make_engine({M::model}, s, bed);
     REQUIRE(run_simulation(*plain_engine, s, plain).status == RunStatus::completed);
     RunControl every_observation;
     every_observation.checkpoint_interval = std::chrono::nanoseconds(1);
-    auto saved_engine = make_engine(M::model, s, bed);
+    auto saved_engine = make_engine({M::model}, s, bed);
     REQUIRE(run_simulation(*saved_engine, s, saved, every_observation).status == RunStatus::completed);
     // Every field equal (the records' defaulted ==: a memcmp would also compare their padding).
     CHECK(plain.samples == saved.samples);  // saving never perturbs the run
@@ -70,7 +70,7 @@ TEST_CASE_TEMPLATE("a run resumed from any of its checkpoints gives the same bit
       resumed.cycles.assign(plain.cycles.begin(), plain.cycles.begin() + c.cycles);
       CheckpointReader in(c.state);
       const RunLoopState loop = read_run_loop_state(in);
-      const auto engine = restore_engine(M::model, s, bed, nullptr, false, in);
+      const auto engine = restore_engine({M::model}, s, bed, in);
       const RunOutcome outcome = run_simulation(*engine, s, resumed, {}, &loop);
       CHECK(outcome.status == RunStatus::completed);
       CHECK(outcome.samples == static_cast<int>(plain.samples.size()));
@@ -90,7 +90,7 @@ TEST_CASE_TEMPLATE("an engine restored on two threads continues one saved on one
   const Particles bed = placed(s);
   const int before = omp_get_max_threads();
   omp_set_num_threads(1);
-  const auto original = make_engine(M::model, s, bed);
+  const auto original = make_engine({M::model}, s, bed);
   original->advance_to(0.0005);
   CheckpointWriter out(RunStore::schema_version());
   original->save(out);
@@ -98,7 +98,7 @@ TEST_CASE_TEMPLATE("an engine restored on two threads continues one saved on one
   original->advance_to(0.001);
   omp_set_num_threads(2);
   CheckpointReader in(blob);
-  const auto restored = restore_engine(M::model, s, bed, nullptr, false, in);
+  const auto restored = restore_engine({M::model}, s, bed, in);
   restored->advance_to(0.001);
   if (M::model == Model::soft) CHECK(test::statistic(*restored, "threads_used") == 2);
   omp_set_num_threads(before);
@@ -108,13 +108,13 @@ TEST_CASE_TEMPLATE("an engine restored on two threads continues one saved on one
 
 TEST_CASE("a checkpoint that is damaged, of another format or of another engine is refused") {
   const Scenario s = load_scenario(test::scenario_file("small"), short_run);
-  const auto soft = make_engine(Model::soft, s, placed(s));
+  const auto soft = make_engine({Model::soft}, s, placed(s));
   CheckpointWriter out(RunStore::schema_version());
   soft->save(out);
   std::vector<std::byte> blob = out.finish();
   {
     CheckpointReader in(blob);
-    CHECK_THROWS_WITH_AS(restore_engine(Model::hard, s, placed(s), nullptr, false, in),
+    CHECK_THROWS_WITH_AS(restore_engine({Model::hard}, s, placed(s), in),
                          doctest::Contains("the checkpoint does not fit this engine"), RuntimeFailure);
   }
   blob[blob.size() / 2] ^= std::byte{1};

@@ -42,7 +42,7 @@ TEST_CASE_TEMPLATE("contract: E(0) + W = E + D in every excitation mode, each sp
   for (const auto& mode : test::excitation_modes()) {
     CAPTURE(mode.empty() ? std::string("free") : mode[0]);
     const Scenario s = load_scenario(test::scenario_file("small"), mode);
-    const auto engine = make_engine(M::model, s, placed(s));
+    const auto engine = make_engine({M::model}, s, placed(s));
     const double e0 = engine->observe().energy.stored_J();
     double worst = 0;
     for (int k = 1; k <= 50; ++k) {
@@ -64,7 +64,7 @@ TEST_CASE_TEMPLATE("contract: one thread or two, the same bits", M, SoftModel, H
   const Particles bed = moving(s, 0.2, 100.0);
   auto run_on = [&](int threads) {
     omp_set_num_threads(threads);
-    const auto engine = make_engine(M::model, s, bed);
+    const auto engine = make_engine({M::model}, s, bed);
     engine->advance_to(0.0005);
     return engine->state();
   };
@@ -83,7 +83,7 @@ TEST_CASE_TEMPLATE("contract: spheres and a free host conserve vertical momentum
       "[host]\nmass_kg = 0.002\nstiffness_N_m = 1e-20\ndamping_N_s_m = 0\nz0_m = 0\nv0_m_s = 0.05\n"
       "[gravity]\ng_m_s2 = 0\n[cavity]\ndiameter_m = 0.008\nheight_m = 0.006\n"
       "[particles]\ncount = 40\ndiameter_m = 0.001\n[hard]\nen = 0.7\nmu = 0.4\nbeta0 = 0.3\n");
-  const auto engine = make_engine(M::model, s, moving(s, 0.3, 200.0));
+  const auto engine = make_engine({M::model}, s, moving(s, 0.3, 200.0));
   auto momentum = [&] {
     const State st = engine->state();
     double p = s.host.mass_kg * st.observation.host.v_m_s;
@@ -114,7 +114,7 @@ TEST_CASE_TEMPLATE("contract: without spheres either model runs the host alone o
   // model: the soft and hard engines size their cells by their spheres and need one at least.
   // Table 1's host released from z0 = 15.7 mm: z = z0 e^{-αt} (cos ω_d t + α/ω_d sin ω_d t).
   const Scenario s = load_scenario(test::scenario_file("table1"), {"particles.count=0"});
-  const auto engine = make_engine(M::model, s, Particles(0));
+  const auto engine = make_engine({M::model}, s, Particles(0));
   const double m = 0.0376, k = 470, c = 0.1, z0 = 0.0157;
   const double alpha = c / (2 * m), wd = std::sqrt(k / m - alpha * alpha);
   const double e0 = engine->observe().energy.stored_J();

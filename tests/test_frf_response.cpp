@@ -38,7 +38,7 @@ TEST_CASE_TEMPLATE("the host alone: steady amplitude, phase and loss factor as i
       CAPTURE(f_hz);
       const Scenario s =
           test::scenario_from(base + "[excitation]\n" + drive + "frequency_hz = " + std::to_string(f_hz) + "\n");
-      auto engine = make_engine(M::model, s, floating);
+      auto engine = make_engine({M::model}, s, floating);
       const FrfPointOutcome point = run_frf_point(*engine, s, criterion);
       const test::ClosedForm exact = test::host_alone(s);
       const ResponseMetrics& m = point.metrics;
@@ -73,7 +73,7 @@ TEST_CASE_TEMPLATE("a bed resting on the floor under Gamma < 1: apparent mass th
       "40\ndiameter_m = "
       "0.0015\n[excitation]\nmode = force\nforce_N = 0.2\nfrequency_hz = 12\n");
   const Particles bed = soft::settle_bed(s, place_particles(s.particles, s.cavity, s.host.z0_m)).particles;
-  auto engine = make_engine(M::model, s, bed);
+  auto engine = make_engine({M::model}, s, bed);
   SteadyStateCriterion criterion;
   criterion.amplitude_tolerance = 1e-4;
   criterion.phase_tolerance_rad = 1e-4;

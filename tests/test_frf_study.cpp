@@ -251,7 +251,7 @@ TEST_CASE("continuation: each point starts from the stored final state of the on
           0.2 * 4 * std::numeric_limits<double>::epsilon() * w1 * end1->t_s);
     // The second point's engine holds every sphere where the first left it, bit for bit.
     const Particles stored = store.load_initial_particles(end1->state_id);
-    auto next = make_engine(model, second, stored);
+    auto next = make_engine({model}, second, stored);
     const State start = next->state();
     CHECK(start.particles.position_m == stored.position_m);
     CHECK(start.particles.velocity_m_s == stored.velocity_m_s);
@@ -263,14 +263,14 @@ TEST_CASE("continuation: each point starts from the stored final state of the on
     const Particles bed = store.load_initial_particles(
         count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = " + std::to_string(end1->run_id)));
     const Scenario first_scenario = point_scenario(s, s.points[0]);
-    auto engine = make_engine(model, first_scenario, bed);
+    auto engine = make_engine({model}, first_scenario, bed);
     const FrfPointOutcome again = run_frf_point(*engine, first_scenario, point_criterion(s, s.points[0]));
     State kept{engine->observe(), stored};
     kept.observation.host = end1->host;
     test::check_same_state(engine->state(), kept);
     CHECK(engine->observe().t_s == end1->t_s);
     // The second from that state gives the stored metrics.
-    auto from_kept = make_engine(model, second, kept.particles);
+    auto from_kept = make_engine({model}, second, kept.particles);
     const FrfPointOutcome next_point = run_frf_point(*from_kept, second, point_criterion(s, s.points[1]));
     const auto rows = studies.frf_points(1);
     CHECK(rows[0].result->metrics.amplitude_m == again.metrics.amplitude_m);

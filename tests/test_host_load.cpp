@@ -41,7 +41,7 @@ TEST_CASE_TEMPLATE("the particles' load on the host balances its momentum and th
     CAPTURE(excitation);
     const Scenario s = test::scenario_from(small_damper + excitation);
     const Particles bed = place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m);
-    auto engine = make_engine(M::model, s, bed);
+    auto engine = make_engine({M::model}, s, bed);
     const State start = engine->state();
     double fastest_host_m_s = 0.0;
     for (int k = 1; k <= 150; ++k) {
@@ -76,7 +76,7 @@ TEST_CASE_TEMPLATE("a bed resting on the floor of a host at rest loads it with i
   const double m_p = bed.total_mass_kg(), g_z = s.gravity_m_s2.z();
   s.host.z0_m = m_p * g_z / s.host.stiffness_N_m;
   bed.position_m.row(2).array() += s.host.z0_m;
-  auto engine = make_engine(M::model, s, bed);
+  auto engine = make_engine({M::model}, s, bed);
   engine->advance_to(0.5);
   const Observation o = engine->observe();
   CAPTURE(o.host.z_m - s.host.z0_m);

@@ -90,7 +90,7 @@ TEST_CASE_TEMPLATE("a sphere dropped on a fixed floor: bounce heights and time t
   }
 
   // Sampled flight: apexes, and the last time above a height between the 6th and 7th apexes.
-  auto engine = make_engine(M::model, s, ball, &lead_calibration());
+  auto engine = make_engine({M::model, lead_calibration()}, s, ball);
   const double sample_s = 1e-5;
   const double stop_height = std::sqrt(apex[5] * apex[6]);
   std::vector<double> measured_apex;
@@ -132,7 +132,7 @@ PairOutcome collide(Model model, const Eigen::Vector3d& relative_velocity) {
   const Eigen::Vector3d centre(0, 0, 0.01), gap(2 * radius_m + 1e-9, 0, 0);
   const Particles pair =
       test::spheres({centre, centre + gap}, {0.5 * relative_velocity, -0.5 * relative_velocity}, radius_m, lead_kg_m3);
-  auto engine = make_engine(model, s, pair, &lead_calibration());
+  auto engine = make_engine({model, lead_calibration()}, s, pair);
   engine->advance_to(0.002);  // a few microseconds of contact; 1 mm of flight after it
   const Particles p = engine->state().particles;
   REQUIRE(engine->observe().counters.contacts == 0);
@@ -197,7 +197,7 @@ TEST_CASE_TEMPLATE("a sphere on a harmonically forced floor: the momentum it exc
       "[cavity]\ndiameter_m = 0.01\nheight_m = 0.006\n[particles]\ncount = 1\ndiameter_m = 0.003\ndensity_kg_m3 = "
       "9000\n");
   const Particles ball = test::spheres({{0.001, 0, 0.003}}, {{0.05, 0, -0.2}}, 0.0015, lead_kg_m3);
-  auto engine = make_engine(M::model, s, ball, nullptr);
+  auto engine = make_engine({M::model}, s, ball);
   const double m = ball.mass_kg[0], w = s.excitation.angular_frequency_rad_s(), f0 = s.excitation.force_N;
   auto momentum = [&] {
     const State st = engine->state();
@@ -238,7 +238,7 @@ struct DamperOutcome {
 
 DamperOutcome run_damper(Model model, const Scenario& s, const Particles& bed) {
   const RestitutionTable table = calibrate_restitution(s);
-  auto engine = make_engine(model, s, bed, &table);
+  auto engine = make_engine({model, table}, s, bed);
   CycleAnalyzer analyzer = make_cycle_analyzer(s, bed);
   DamperOutcome out;
   const double sample_s = 1e-4;
@@ -364,7 +364,7 @@ TEST_CASE("where the models must disagree: a dense slug lands, the hard model ta
     const Scenario s =
         load_scenario(test::scenario_file("small"), {"hard.restitution=calibrated", "run.duration_s=0.06", kn});
     const RestitutionTable table = calibrate_restitution(s);
-    auto soft = make_engine(Model::soft, s, bed, &table), hard = make_engine(Model::hard, s, bed, &table);
+    auto soft = make_engine({Model::soft, table}, s, bed), hard = make_engine({Model::hard, table}, s, bed);
     soft->advance_to(s.run.duration_s);
     hard->advance_to(s.run.duration_s);
     const double soft_impact = soft->observe().energy.dissipated_impact_J,
@@ -385,7 +385,7 @@ struct Ringing {
 /// A bed resting in the host under Gamma < 1: the host's ringing frequency (zero crossings
 /// about the loaded equilibrium) and what the particles dissipate, over [from_s, to_s].
 Ringing ring(Model model, const Scenario& s, const Particles& bed, double from_s, double to_s) {
-  auto engine = make_engine(model, s, bed, nullptr);
+  auto engine = make_engine({model}, s, bed);
   engine->advance_to(from_s);
   const double equilibrium = bed.total_mass_kg() * s.gravity_m_s2.z() / s.host.stiffness_N_m;
   const double dissipated_before = particle_dissipation_J(*engine);

@@ -88,7 +88,7 @@ TEST_CASE("the run loop tells each observation's step, off the grid only at a du
       CHECK(t == s.run.duration_s);
     }
   };
-  const auto engine = make_engine(Model::hard, s, Particles(0));
+  const auto engine = make_engine({Model::hard}, s, Particles(0));
   CountSamples samples;
   REQUIRE(run_simulation(*engine, s, samples, control).status == RunStatus::completed);
   // 0.0104 s = 62.4 steps of 1/6000 s: steps 0 to 62, then the end before step 63.

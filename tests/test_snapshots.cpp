@@ -95,7 +95,7 @@ TEST_CASE("two spheres meeting in free space: each takes half of the losses, a s
     const Scenario s = free_space();
     const Particles p = test::spheres({{-0.002, 0.0, 0.025}, {0.002, 0.0003, 0.025}, {0.0, 0.01, 0.025}},
                                       {{0.5, 0.0, 0.0}, {-0.5, 0.0, 0.0}, {0.0, 0.0, 0.0}});
-    const auto engine = make_engine(model, s, p);
+    const auto engine = make_engine({model}, s, p);
     engine->advance_to(0.01);
     const EnergyLedger ledger = engine->observe().energy;
     const SphereDissipation lost = engine->dissipation_by_sphere();
@@ -115,7 +115,7 @@ TEST_CASE("a sphere bouncing to rest on the floor keeps all of its losses") {
     const Scenario s = test::scenario_from(
         "[host]\nz0_m = 0\nv0_m_s = 0\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n[particles]\ncount = 1\n"
         "diameter_m = 0.001\n");
-    const auto engine = make_engine(model, s, test::spheres({{0.001, 0.0, 0.005}}, {{0.1, 0.0, 0.0}}));
+    const auto engine = make_engine({model}, s, test::spheres({{0.001, 0.0, 0.005}}, {{0.1, 0.0, 0.0}}));
     engine->advance_to(0.5);
     const EnergyLedger ledger = engine->observe().energy;
     const SphereDissipation lost = engine->dissipation_by_sphere();
@@ -131,7 +131,7 @@ TEST_CASE("small.ini, both models: every sphere's share of the losses adds up to
   const Particles placed = place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m);
   for (const Model model : both_models) {
     CAPTURE(to_string(model));
-    const auto engine = make_engine(model, s, placed);
+    const auto engine = make_engine({model}, s, placed);
     engine->advance_to(s.run.duration_s);
     test::check_dissipation_by_sphere(*engine);
     const SphereDissipation lost = engine->dissipation_by_sphere();
@@ -181,7 +181,7 @@ TEST_CASE("snapshots of both engines, read back by VTK, hold the engines' states
   for (const Model model : both_models) {
     CAPTURE(to_string(model));
     const std::int64_t run_id = model == Model::soft ? 1 : 2;
-    const auto engine = make_engine(model, s, placed);
+    const auto engine = make_engine({model}, s, placed);
     SnapshotWriter writer(settings, s, run_id);
     std::ofstream dump(dir / ("dump-" + std::to_string(run_id)));
     RunControl control;

@@ -6,13 +6,15 @@
 # error, and the engine's statistics (all but peak_memory_kB, which is the process's).
 # Builds nothing.
 #
-# Usage: tools/check-same-bits.sh [--beds STORE] [--keep DIR] OLD_PDAMP NEW_PDAMP MODEL CASE...
+# Usage: tools/check-same-bits.sh [--beds STORE] [--keep DIR] OLD_PDAMP NEW_PDAMP [MODEL CASE...]
 #   MODEL   soft or hard (pdamp run --model)
 #   CASE    a scenario file, or a name in data/scenarios, with an optional @DURATION_S:
 #           table1  table2@0.05  data/scenarios/table4_f100.ini@0.2
+#           Without MODEL and CASE: the refactoring check, small and table1@0.05 soft,
+#           small and table1@1.5 hard.
 #   --beds STORE  a store that holds the cases' settled beds; it is copied, never written.
-#           Without it the old binary settles each case's bed (the soft engine; minutes for
-#           Table 1) and the new one starts from the bed the old one stored.
+#           Without it the old binary settles each case's bed once (the soft engine;
+#           minutes for Table 1) and every later run of the case starts from it.
 #   --keep DIR    keep the stores (DIR/CASE/old.sqlite, new.sqlite; default: a temporary
 #           folder, removed at the end)
 # Prints one line per case (the two runs' wall times for information, not as a benchmark)
@@ -34,20 +36,30 @@ while [ $# -gt 0 ]; do
     *) break ;;
   esac
 done
-[ $# -ge 4 ] || usage
-old=$1 new=$2 model=$3
-shift 3
+[ $# -eq 2 ] || [ $# -ge 4 ] || usage
+old=$1 new=$2
+shift 2
+# One job per run: MODEL CASE.
+jobs=()
+if [ $# -eq 0 ]; then
+  jobs=("soft small" "soft table1@0.05" "hard small" "hard table1@1.5")
+else
+  model=$1
+  shift
+  for case_ in "$@"; do jobs+=("$model $case_"); done
+fi
 for binary in "$old" "$new"; do
   [ -x "$binary" ] || { echo "tools/check-same-bits.sh: '$binary' is not an executable pdamp" >&2; exit 2; }
 done
-case $model in soft | hard) ;; *) echo "tools/check-same-bits.sh: MODEL '$model' must be soft or hard" >&2; exit 2 ;; esac
 if [ -n "$beds" ] && [ ! -f "$beds" ]; then
   echo "tools/check-same-bits.sh: --beds '$beds' is no file" >&2
   exit 2
 fi
 # Every case resolved before anything runs.
-scenarios=() durations=() names=()
-for case_ in "$@"; do
+models=() scenarios=() durations=() names=()
+for job in "${jobs[@]}"; do
+  model=${job%% *} case_=${job#* }
+  case $model in soft | hard) ;; *) echo "tools/check-same-bits.sh: MODEL '$model' must be soft or hard" >&2; exit 2 ;; esac
   scenario=${case_%@*} duration=""
   [ "$scenario" != "$case_" ] && duration=${case_##*@}
   [ -f "$scenario" ] || scenario="$root/data/scenarios/$scenario.ini"
@@ -59,8 +71,8 @@ for case_ in "$@"; do
     echo "tools/check-same-bits.sh: case '$case_': duration '$duration' is not a number of seconds" >&2
     exit 2
   fi
-  scenarios+=("$scenario") durations+=("$duration")
-  names+=("$(basename "$scenario" .ini)${duration:+@$duration}")
+  models+=("$model") scenarios+=("$scenario") durations+=("$duration")
+  names+=("$model-$(basename "$scenario" .ini)${duration:+@$duration}")
 done
 if [ -n "$keep" ]; then
   mkdir -p "$keep"
@@ -74,7 +86,7 @@ fi
 run_case() {
   local binary=$1 k=$2 store=$3 log
   log="${store%.sqlite}.log"
-  local args=(run --scenario "${scenarios[$k]}" --model "$model" --db "$store")
+  local args=(run --scenario "${scenarios[$k]}" --model "${models[$k]}" --db "$store")
   [ -n "${durations[$k]}" ] && args+=(--duration "${durations[$k]}")
   if ! "$binary" "${args[@]}" >"$log" 2>&1; then
     echo "${names[$k]}: $binary failed (exit $?); its output:" >&2
@@ -104,6 +116,8 @@ compare_rows() {
       FROM ($per_column) WHERE rows > 0;"
 }
 
+shared_beds=0
+[ -z "$beds" ] && shared_beds=1
 failed=0
 for k in "${!names[@]}"; do
   dir="$work/${names[$k]}"
@@ -113,6 +127,10 @@ for k in "${!names[@]}"; do
     sqlite3 "$beds" ".backup '$dir/old.sqlite'"
   fi
   a=$(run_case "$old" "$k" "$dir/old.sqlite") || { failed=1; continue; }
+  if [ "$shared_beds" = 1 ]; then  # the beds settled so far, for the next cases
+    beds="$work/beds.sqlite"
+    sqlite3 "$dir/old.sqlite" ".backup '$beds'"
+  fi
   sqlite3 "$dir/old.sqlite" ".backup '$dir/new.sqlite'"  # with the bed the old run started from
   b=$(run_case "$new" "$k" "$dir/new.sqlite") || { failed=1; continue; }
   differences=$(

@@ -155,8 +155,7 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
                      model_name + "'");
   }
   const Scenario scenario = load_scenario(request.file, request.overrides);
-  RunPlan plan = plan_run(model, scenario, snapshots);
-  plan.diagnose_events = diagnose_events;
+  const RunPlan plan = plan_run(model, scenario, snapshots, diagnose_events);
 
   RunStore store(db);
   install_stop_handlers();
@@ -239,12 +238,12 @@ int compare_command(const ScenarioRequest& request, const std::filesystem::path&
   CommandBed bed(scenario, store, progress);
   std::int64_t run_ids[2] = {0, 0};
   for (const RunPlan& plan : plans) {
-    const std::string label = std::string(to_string(plan.model)) + " model";
+    const std::string label = std::string(to_string(plan.engine.model)) + " model";
     progress.message("pdamp: " + label);
     const StoredRun run = run_and_store(
         store, plan, bed.source(), run_control(scenario, progress, label, checkpoint_interval), warnings_to(progress));
     progress.end();
-    run_ids[plan.model == Model::hard] = run.run_id;
+    run_ids[plan.engine.model == Model::hard] = run.run_id;
     if (const auto written = store.snapshots(run.run_id)) {
       progress.message("pdamp: " + std::to_string(written->frames) + " snapshots of run " + std::to_string(run.run_id) +
                        ": " + printable(written->collection));

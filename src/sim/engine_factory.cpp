@@ -5,6 +5,7 @@
 #include "pdamp/errors.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/host_only_engine.hpp"
+#include "pdamp/sim/calibration.hpp"
 #include "pdamp/sim/run_budget.hpp"
 #include "pdamp/soft/simd_path.hpp"
 #include "pdamp/soft/soft_engine.hpp"
@@ -16,13 +17,13 @@ namespace {
 std::string describe_soft(const Scenario& scenario) { return "time step " + soft::describe_time_step(scenario); }
 std::string describe_hard(const Scenario&) { return "event-driven, no time step"; }
 
-std::unique_ptr<Engine> make_soft(const Scenario& scenario, const Particles& initial, const RestitutionTable*, bool) {
+std::unique_ptr<Engine> make_soft(const EngineSetup&, const Scenario& scenario, const Particles& initial) {
   return std::make_unique<soft::SoftEngine>(scenario, initial);
 }
-std::unique_ptr<Engine> make_hard(const Scenario& scenario, const Particles& initial,
-                                  const RestitutionTable* calibration, bool diagnose_events) {
-  auto engine = std::make_unique<hard::HardEngine>(scenario, initial, calibration);
-  if (diagnose_events) engine->diagnose_events(scenario);
+std::unique_ptr<Engine> make_hard(const EngineSetup& setup, const Scenario& scenario, const Particles& initial) {
+  auto engine =
+      std::make_unique<hard::HardEngine>(scenario, initial, setup.calibration ? &*setup.calibration : nullptr);
+  if (setup.diagnose_events) engine->diagnose_events(scenario);
   return engine;
 }
 
@@ -58,16 +59,28 @@ void check_model_can_run(Model model, const Scenario& scenario) {
   check_run_budget(model, scenario);
 }
 
-std::unique_ptr<Engine> make_engine(Model model, const Scenario& scenario, const Particles& initial,
-                                    const RestitutionTable* calibration, bool diagnose_events) {
-  if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
-  return engine_kind(model).make(scenario, initial, calibration, diagnose_events);
+EngineSetup prepare_engine(Model model, const Scenario& scenario, bool diagnose_events) {
+  check_model_can_run(model, scenario);
+  EngineSetup setup{model, std::nullopt, diagnose_events};
+  if (model == Model::hard && scenario.hard_restitution == HardRestitution::calibrated &&
+      scenario.particles.count > 0) {
+    try {
+      setup.calibration = calibrate_restitution(scenario);
+    } catch (const RuntimeFailure& e) {
+      throw InputError(std::string("hard.restitution = calibrated: ") + e.what());
+    }
+  }
+  return setup;
 }
 
-std::unique_ptr<Engine> restore_engine(Model model, const Scenario& scenario, const Particles& initial,
-                                       const RestitutionTable* calibration, bool diagnose_events,
+std::unique_ptr<Engine> make_engine(const EngineSetup& setup, const Scenario& scenario, const Particles& initial) {
+  if (initial.size() == 0) return std::make_unique<HostOnlyEngine>(scenario);
+  return engine_kind(setup.model).make(setup, scenario, initial);
+}
+
+std::unique_ptr<Engine> restore_engine(const EngineSetup& setup, const Scenario& scenario, const Particles& initial,
                                        CheckpointReader& checkpoint) {
-  auto engine = make_engine(model, scenario, initial, calibration, diagnose_events);
+  auto engine = make_engine(setup, scenario, initial);
   engine->restore(checkpoint);
   checkpoint.finish();
   return engine;

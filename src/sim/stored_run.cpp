@@ -10,7 +10,6 @@
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/scenario/scenario_loader.hpp"
-#include "pdamp/sim/calibration.hpp"
 
 namespace pdamp {
 namespace {
@@ -21,11 +20,10 @@ std::unique_ptr<Engine> start_engine(RunStore& store, std::int64_t run_id, const
                                      const BedSource& bed_source) {
   const Scenario& scenario = *plan.scenario;
   const InitialBed& bed = bed_source();
-  auto engine = make_engine(plan.model, scenario, bed.particles, plan.calibration ? &*plan.calibration : nullptr,
-                            plan.diagnose_events);
+  auto engine = make_engine(plan.engine, scenario, bed.particles);
   store.start_run(run_id, {engine->time_step_s() > 0 ? std::optional(engine->time_step_s()) : std::nullopt,
                            bed.state_id, solid_fraction(scenario.cavity, bed.particles)});
-  if (plan.calibration && bed.particles.size() > 0) store.save_calibration(run_id, *plan.calibration);
+  if (plan.engine.calibration && bed.particles.size() > 0) store.save_calibration(run_id, *plan.engine.calibration);
   return engine;
 }
 
@@ -70,19 +68,10 @@ std::string exact_text(double value) {
 
 }  // namespace
 
-RunPlan plan_run(Model model, const Scenario& scenario, const std::optional<SnapshotSettings>& snapshots) {
-  check_model_can_run(model, scenario);
+RunPlan plan_run(Model model, const Scenario& scenario, const std::optional<SnapshotSettings>& snapshots,
+                 bool diagnose_events) {
   if (snapshots) check_snapshot_settings(*snapshots, scenario);
-  RunPlan plan{model, &scenario, std::nullopt, snapshots, false, {}};
-  if (model == Model::hard && scenario.hard_restitution == HardRestitution::calibrated &&
-      scenario.particles.count > 0) {
-    try {
-      plan.calibration = calibrate_restitution(scenario);
-    } catch (const RuntimeFailure& e) {
-      throw InputError(std::string("hard.restitution = calibrated: ") + e.what());
-    }
-  }
-  return plan;
+  return {prepare_engine(model, scenario, diagnose_events), &scenario, snapshots, {}};
 }
 
 StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& bed, const RunControl& control,
@@ -91,7 +80,7 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
   const Scenario& scenario = *plan.scenario;
   const auto wall_start = std::chrono::steady_clock::now();
   StoredRun result;
-  result.run_id = store.begin_run({std::string(to_string(plan.model)), scenario.name, scenario.canonical_text,
+  result.run_id = store.begin_run({std::string(to_string(plan.engine.model)), scenario.name, scenario.canonical_text,
                                    scenario.particles.seed, scenario.particles.count, scenario.run.duration_s});
   if (started) started(result.run_id);
   std::unique_ptr<Engine> engine;
@@ -136,13 +125,12 @@ StoredRun resume_and_store(RunStore& store, std::int64_t run_id, std::optional<d
   if (until_s) overrides.push_back("run.duration_s=" + exact_text(*until_s));
   const Scenario scenario = parse_scenario(run.scenario_text, "resumed",
                                            "run " + std::to_string(run_id) + "'s scenario", overrides, "--until");
-  const RunPlan plan = plan_run(model, scenario);
+  const EngineSetup setup = prepare_engine(model, scenario);
   const Particles bed = run.initial_state_id ? store.load_initial_particles(*run.initial_state_id) : Particles(0);
   // Restored before the store is touched: a checkpoint that does not fit changes nothing.
   CheckpointReader checkpoint(run.checkpoint.state);
   const RunLoopState loop = read_run_loop_state(checkpoint);
-  const auto engine =
-      restore_engine(model, scenario, bed, plan.calibration ? &*plan.calibration : nullptr, false, checkpoint);
+  const auto engine = restore_engine(setup, scenario, bed, checkpoint);
   store.claim_for_resume(run, scenario.run.duration_s, scenario.canonical_text);
   if (store.snapshots(run_id) && warn)
     warn("a resumed run writes no snapshots: run " + std::to_string(run_id) + "'s stop where it was stopped");

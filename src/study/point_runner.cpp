@@ -75,7 +75,7 @@ class PointExecution {
     };
     PointRuns result;
     for (std::size_t m = 0; m < plans.size(); ++m) {
-      const std::string_view model = to_string(plans[m].model);
+      const std::string_view model = to_string(plans[m].engine.model);
       RunControl run_control;
       run_control.stop = control_->stop;
       run_control.progress = [&, duration = scenario.run.duration_s](double t) {

@@ -12,7 +12,6 @@
 #include <optional>
 #include <string>
 
-#include "pdamp/model/restitution.hpp"
 #include "pdamp/sim/engine_factory.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/run.hpp"
@@ -23,22 +22,19 @@ namespace pdamp {
 
 /// A model checked to run a scenario, with what it needs that depends on the scenario alone.
 struct RunPlan {
-  Model model;
+  EngineSetup engine;
   const Scenario* scenario;
-  std::optional<RestitutionTable> calibration;  ///< the hard model's, when calibrated
-  std::optional<SnapshotSettings> snapshots;    ///< checked against the scenario
-  /// The hard engine counts where its collisions come from into its statistics
-  /// (hard/event_diagnosis.hpp); the results are the same bits.
-  bool diagnose_events = false;
+  std::optional<SnapshotSettings> snapshots;  ///< checked against the scenario
   /// What drives the engine once it is built: empty for the run loop over the scenario's
   /// duration (run_simulation), or another driver (a frequency-response point's cycles).
   std::function<RunOutcome(Engine&, const Scenario&, RunRecorder&, const RunControl&)> body;
 };
 
-/// Checks that `model` can run `scenario` (check_model_can_run) with these snapshots
-/// (check_snapshot_settings), and calibrates the hard model's restitution if the scenario
-/// asks for it. Throws InputError for any of them failing.
-RunPlan plan_run(Model model, const Scenario& scenario, const std::optional<SnapshotSettings>& snapshots = {});
+/// The engine's setup (prepare_engine: the model can run `scenario`, calibrated if the
+/// scenario asks) with these snapshots (check_snapshot_settings). Throws InputError for
+/// any of them failing.
+RunPlan plan_run(Model model, const Scenario& scenario, const std::optional<SnapshotSettings>& snapshots = {},
+                 bool diagnose_events = false);
 
 /// Gives the bed a run starts from, settling it or taking it from the store (the bed is
 /// shared by the runs of a comparison). May throw, Interrupted included.

@@ -44,11 +44,12 @@ inline std::pair<std::int64_t, std::int64_t> run_row_differences(const std::file
 /// (bit for bit, in every column, or missing from either), and how many there are.
 inline std::pair<std::int64_t, std::int64_t> sample_differences(const std::filesystem::path& a,
                                                                 const std::filesystem::path& b) {
-  return run_row_differences(a, b, "samples", "t_s",
-                             {"host_z_m", "host_v_m_s", "particle_translational_J", "particle_rotational_J",
-                              "host_kinetic_J", "spring_potential_J", "gravitational_potential_J", "contact_elastic_J",
-                              "excitation_work_J", "dissipated_impact_J", "dissipated_friction_J",
-                              "dissipated_viscous_J", "energy_balance_rel_err", "contacts", "events", "steps"});
+  return run_row_differences(
+      a, b, "samples", "t_s",
+      {"host_z_m", "host_v_m_s", "particle_translational_J", "particle_rotational_J", "host_kinetic_J",
+       "spring_potential_J", "gravitational_potential_J", "contact_elastic_J", "excitation_work_J",
+       "dissipated_impact_J", "dissipated_friction_J", "dissipated_viscous_J", "energy_balance_rel_err", "time_steps",
+       "collisions", "contacts", "riding_spheres"});
 }
 
 /// The same for the runs' cycles.

@@ -14,6 +14,7 @@
 #include "pdamp/sim/stored_run.hpp"
 #include "pdamp/soft/soft_engine.hpp"
 #include "pdamp/store/run_store.hpp"
+#include "pdamp/version.hpp"
 #include "test_process.hpp"
 #include "test_support.hpp"
 
@@ -244,6 +245,13 @@ TEST_CASE(
   sqlite::Database d(db);
   d.exec("UPDATE run_checkpoints SET pdamp_version = '0.0.1' WHERE run_id = 1");
   refused({"1", "--until", "0.5"}, "run 1's checkpoint was written by pdamp 0.0.1");
+  // One of this pdamp under an older store schema (every checkpoint before a migration
+  // that changed what it holds, e.g. schema 12's engine counters in the cycle analyzer's
+  // observations) is refused as well.
+  d.exec("UPDATE run_checkpoints SET pdamp_version = '" + std::string(version_string) +
+         "', schema_version = " + std::to_string(RunStore::schema_version() - 1) + " WHERE run_id = 1");
+  refused({"1", "--until", "0.5"}, "(store schema " + std::to_string(RunStore::schema_version() - 1) +
+                                       "); this is pdamp " + std::string(version_string));
   const ProcessLease me = this_process_lease();
   d.exec("UPDATE runs SET status = 'running', lease_host = '" + me.host + "', lease_pid = " + std::to_string(me.pid) +
          ", lease_start = " + std::to_string(me.start_ticks) + " WHERE run_id = 1");

@@ -784,8 +784,8 @@ TEST_CASE("pdamp compare runs both models from one bed and stores their comparis
   const std::string total = "SELECT dissipated_impact_J + dissipated_friction_J + dissipated_viscous_J FROM " + last;
   CHECK(same("SELECT dissipated_soft_J FROM comparisons", in_run(total, 1)));
   CHECK(same("SELECT dissipated_hard_J FROM comparisons", in_run(total, 2)));
-  CHECK(same("SELECT soft_steps FROM comparisons", in_run("SELECT steps FROM " + last, 1)));
-  CHECK(same("SELECT hard_events FROM comparisons", in_run("SELECT events FROM " + last, 2)));
+  CHECK(same("SELECT soft_steps FROM comparisons", in_run("SELECT time_steps FROM " + last, 1)));
+  CHECK(same("SELECT hard_events FROM comparisons", in_run("SELECT collisions FROM " + last, 2)));
   CHECK(same("SELECT wall_time_ratio FROM comparisons",
              "SELECT s.wall_time_s / h.wall_time_s FROM runs s, runs h WHERE s.run_id = 1 AND h.run_id = 2"));
   for (const auto& [model, run] : {std::pair{"soft", 1}, std::pair{"hard", 2}}) {

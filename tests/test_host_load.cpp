@@ -54,7 +54,7 @@ TEST_CASE_TEMPLATE("the particles' load on the host balances its momentum and th
     const double particles_change = particle_momentum_N_s(end) - particle_momentum_N_s(start);
     // Round-off relative to the momenta that went round, and a time-stepping engine's
     // rounding of each step's velocity updates (a rounding of the speed each, two kicks).
-    const double steps = static_cast<double>(end.observation.counters.steps);
+    const double steps = static_cast<double>(end.observation.counters.time_steps.value_or(0));
     const double momenta = (s.host.mass_kg + m_p) * fastest_host_m_s;
     const double scale = m_p * std::abs(g_z) * t + momenta * (1.0 + 2e12 * steps * DBL_EPSILON);
     CAPTURE(load.particles_N_s);

@@ -480,6 +480,6 @@ TEST_CASE("a stop request ends advance_to within a step, and settling with it") 
   SoftEngine engine(s, placement);
   engine.set_stop_request(&stop);
   CHECK_THROWS_AS(engine.advance_to(10.0), Interrupted);
-  CHECK(engine.observe().counters.steps == 0);
+  CHECK(engine.observe().counters.time_steps == 0);
   CHECK_THROWS_WITH_AS(settle_bed(s, placement, &stop), doctest::Contains("settling"), Interrupted);
 }

@@ -156,8 +156,8 @@ TEST_CASE("runs, samples and cycles round-trip through the public tables and vie
                           "particle_translational_J, particle_rotational_J, host_kinetic_J, "
                           "spring_potential_J, gravitational_potential_J, contact_elastic_J, "
                           "excitation_work_J, dissipated_impact_J, dissipated_friction_J, "
-                          "dissipated_viscous_J, energy_balance_rel_err, contacts, events, steps) "
-                          "VALUES (99, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)"),
+                          "dissipated_viscous_J, energy_balance_rel_err, time_steps, collisions, contacts, "
+                          "riding_spheres) VALUES (99, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)"),
                   RuntimeFailure);
 }
 
@@ -523,4 +523,44 @@ TEST_CASE("a store of schema 5 is migrated: every row kept, and run ids beyond a
   RunWriter writer(store, id);
   writer.record_sample(sample_at(0.0), 0.0);
   CHECK_NOTHROW(writer.flush());
+}
+
+TEST_CASE("a store of schema 11 is migrated: each run's counters go to the columns of its engine") {
+  test::TempDir dir("store-migrate-11");
+  const auto file = dir / "v11.sqlite";
+  {
+    // Before schema 12, a sample held contacts, events and steps for every engine:
+    // contacts open (soft) or spheres riding the host (hard). Here 4, 5 and 6 for a soft
+    // run, a hard run and a run of the host alone (no spheres).
+    sqlite::Database v11(file);
+    for (int v = 0; v < 11; ++v) v11.exec(schema::migrations()[static_cast<std::size_t>(v)]);
+    v11.exec("PRAGMA user_version = 11");
+    for (const char* run : {"'soft', 10", "'hard', 10", "'hard', 0"}) {
+      v11.exec(
+          "INSERT INTO runs (model, n_particles, scenario_name, scenario_text, seed, duration_s, pdamp_version, "
+          "status, started_at) VALUES (" +
+          std::string(run) + ", 'old', '', 1, 1.0, '0.1.0', 'completed', '2026-01-01')");
+      v11.exec("INSERT INTO samples VALUES (last_insert_rowid(), 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 4, 5, 6)");
+    }
+  }
+  RunStore store(file);
+  sqlite::Database db(store.file());
+  CHECK(scalar(db, "PRAGMA user_version") == RunStore::schema_version());
+  const auto counters = [&](int run) { return store.results(run).samples.at(0).observation.counters; };
+  CHECK(counters(1) == EngineCounters{6, std::nullopt, 4, std::nullopt});
+  CHECK(counters(2) == EngineCounters{std::nullopt, 5, std::nullopt, 4});
+  CHECK(counters(3) == EngineCounters{});
+  CHECK(scalar(db, "SELECT count(*) FROM run_summary WHERE n_samples = 1") == 3);
+  CHECK(scalar(db, "SELECT count(*) FROM pragma_foreign_key_list('samples') WHERE \"table\" = 'runs'") == 1);
+  // What the engines store now reads back, NULL where an engine keeps no counter.
+  const auto id = store.begin_run(a_run());
+  Observation o = sample_at(0.0);
+  o.counters = {7, std::nullopt, 3, std::nullopt};
+  {
+    RunWriter writer(store, id);
+    writer.record_sample(o, 0.0);
+  }
+  CHECK(store.results(id).samples.at(0).observation.counters == o.counters);
+  CHECK(scalar(db, "SELECT count(*) FROM samples WHERE run_id = " + std::to_string(id) +
+                       " AND collisions IS NULL AND riding_spheres IS NULL") == 1);
 }

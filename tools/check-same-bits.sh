@@ -72,7 +72,9 @@ for job in "${jobs[@]}"; do
     exit 2
   fi
   models+=("$model") scenarios+=("$scenario") durations+=("$duration")
-  names+=("$model-$(basename "$scenario" .ini)${duration:+@$duration}")
+  name="$(basename "$scenario" .ini)${duration:+@$duration}"
+  [ "$#" -eq 0 ] && name="$model-$name"  # the default set runs each case with both models
+  names+=("$name")
 done
 if [ -n "$keep" ]; then
   mkdir -p "$keep"
@@ -96,14 +98,19 @@ run_case() {
   sqlite3 "$store" "SELECT max(run_id) FROM runs"
 }
 
-# The columns of table $2 in store $1 but run_id.
-columns() { sqlite3 "$1" "SELECT name FROM pragma_table_info('$2') WHERE name != 'run_id'"; }
+# The columns of table $3 but run_id that stores $1 and $2 both have.
+columns() {
+  sqlite3 "$2" "ATTACH '$1' AS old; SELECT name FROM pragma_table_info('$3', 'main') WHERE name != 'run_id'
+    INTERSECT SELECT name FROM pragma_table_info('$3', 'old')"
+}
 
 # Compares table $1 of run $5 in store $3 (before) with run $6 in store $4 (now), row by
-# row in the order of column $2: prints what differs, column by column.
+# row in the order of column $2: prints what differs, column by column (the columns both
+# have; when the new binary's schema renamed some, the old run as it migrated them is
+# compared too, in the new store).
 compare_rows() {
   local table=$1 order=$2 store_old=$3 store_new=$4 a=$5 b=$6 per_column="" c
-  for c in $(columns "$store_old" "$table"); do
+  for c in $(columns "$store_old" "$store_new" "$table"); do
     per_column+="${per_column:+ UNION ALL }SELECT '$c' AS name, sum(NOT (o.$c IS n.$c)) AS rows,
       min(CASE WHEN NOT (o.$c IS n.$c) THEN o.$order END) AS first FROM o JOIN n USING (k)"
   done
@@ -135,6 +142,12 @@ for k in "${!names[@]}"; do
   b=$(run_case "$new" "$k" "$dir/new.sqlite") || { failed=1; continue; }
   differences=$(
     compare_rows samples t_s "$dir/old.sqlite" "$dir/new.sqlite" "$a" "$b"
+    renamed=$(sqlite3 "$dir/new.sqlite" "ATTACH '$dir/old.sqlite' AS old;
+      SELECT group_concat(name, ' ') FROM (SELECT name FROM pragma_table_info('samples', 'main')
+        EXCEPT SELECT name FROM pragma_table_info('samples', 'old'))")
+    if [ -n "$renamed" ]; then
+      compare_rows samples t_s "$dir/new.sqlite" "$dir/new.sqlite" "$a" "$b" | sed "s/^/(migrated) /"
+    fi
     compare_rows cycles cycle "$dir/old.sqlite" "$dir/new.sqlite" "$a" "$b"
     sqlite3 -separator ' ' "$dir/new.sqlite" "ATTACH '$dir/old.sqlite' AS old;
       SELECT 'run: ' || o.status || ' ' || o.sim_time_s || ' s, balance ' || o.energy_balance_rel_err ||

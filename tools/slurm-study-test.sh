@@ -153,7 +153,7 @@ compare_point_tables() {
 compare_stores() {
   compare_point_tables
   compare_rows "runs" runs "scenario_name, scenario_text, seed, n_particles, duration_s, dt_s, pdamp_version, status, message, sim_time_s, initial_energy_J, energy_balance_rel_err, solid_fraction"
-  compare_rows "samples" samples "t_s, host_z_m, host_v_m_s, particle_translational_J, particle_rotational_J, host_kinetic_J, spring_potential_J, gravitational_potential_J, contact_elastic_J, excitation_work_J, dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J, energy_balance_rel_err, contacts, events, steps"
+  compare_rows "samples" samples "t_s, host_z_m, host_v_m_s, particle_translational_J, particle_rotational_J, host_kinetic_J, spring_potential_J, gravitational_potential_J, contact_elastic_J, excitation_work_J, dissipated_impact_J, dissipated_friction_J, dissipated_viscous_J, energy_balance_rel_err, time_steps, collisions, contacts, riding_spheres"
   compare_rows "cycles" cycles "cycle, t_start_s, t_end_s, amplitude_m, freq_hz, gamma, psi, psi_impact, psi_friction, psi_viscous, max_host_kinetic_J"
   local beds
   beds=$(sqlite3 "$work/runs.sqlite" "SELECT count(*) FROM initial_states")

@@ -140,8 +140,8 @@ ComparisonRecord compare_runs(const RunResults& soft_run, const RunResults& hard
   r.wall_time_soft_s = soft_run.wall_time_s;
   r.wall_time_hard_s = hard_run.wall_time_s;
   if (r.wall_time_hard_s > 0.0) r.wall_time_ratio = r.wall_time_soft_s / r.wall_time_hard_s;
-  r.soft_steps = soft_end.counters.steps;
-  r.hard_events = hard_end.counters.events;
+  r.soft_steps = soft_end.counters.time_steps.value_or(0);
+  r.hard_events = hard_end.counters.collisions.value_or(0);
   return r;
 }
 

@@ -130,8 +130,8 @@ Observation HardEngine::observe() const {
   // Everything is booked up to t_s_ after advance_to; the books add the rest for an
   // observation taken before the first advance.
   books_.write_to(o, host_.trajectory(), t_s_, host_.riders());
-  o.counters.events = collisions();
-  o.counters.contacts = host_.riding_count();
+  o.counters.collisions = collisions();
+  o.counters.riding_spheres = host_.riding_count();
   return o;
 }
 

@@ -69,7 +69,7 @@ class Collision {
                              std::to_string(normal_speed_) + " m/s failed: " + e.what() +
                              "; use [hard] restitution = constant for this scenario");
       }
-      const bool touching = engine.observe().counters.contacts > 0;
+      const bool touching = engine.observe().counters.contacts.value_or(0) > 0;
       touched |= touching;
       if (touched && !touching) {
         const Particles out = engine.state().particles;

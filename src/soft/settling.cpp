@@ -33,7 +33,7 @@ SettledBed settle_bed(const Scenario& scenario, const Particles& placement, cons
     const double kinetic = engine.particle_kinetic_J();
     if (progress) progress(t, kinetic);
     if (t >= fall_time_s && kinetic < threshold_J) {
-      return {engine.state().particles, t, kinetic, engine.observe().counters.steps};
+      return {engine.state().particles, t, kinetic, *engine.observe().counters.time_steps};
     }
     if (t >= settling_time_limit_s) {
       std::ostringstream msg;

@@ -832,7 +832,7 @@ Observation SoftEngine::observe() const {
   host_model_.write_energy_to(o.energy, t_s_, host_);
   o.energy.contact_elastic_J = contact_elastic_J_;
   o.host_load = host_load_.value();
-  o.counters.steps = steps_;
+  o.counters.time_steps = steps_;
   o.counters.contacts = contacts_;
   return o;
 }

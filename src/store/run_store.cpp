@@ -88,7 +88,8 @@ RunSummary read_summary(const sqlite::Statement& row) {
 constexpr std::string_view sample_columns =
     "t_s, host_z_m, host_v_m_s, particle_translational_J, particle_rotational_J, host_kinetic_J, "
     "spring_potential_J, gravitational_potential_J, contact_elastic_J, excitation_work_J, dissipated_impact_J, "
-    "dissipated_friction_J, dissipated_viscous_J, energy_balance_rel_err, contacts, events, steps";
+    "dissipated_friction_J, dissipated_viscous_J, energy_balance_rel_err, time_steps, collisions, contacts, "
+    "riding_spheres";
 constexpr std::string_view cycle_columns =
     "cycle, t_start_s, t_end_s, amplitude_m, freq_hz, gamma, psi, psi_impact, psi_friction, psi_viscous, "
     "max_host_kinetic_J";
@@ -111,9 +112,10 @@ void insert_sample(sqlite::Statement& insert, std::int64_t run_id, const SampleR
       .bind(13, e.dissipated_friction_J)
       .bind(14, e.dissipated_viscous_J)
       .bind(15, sample.energy_balance_rel_err)
-      .bind(16, o.counters.contacts)
-      .bind(17, o.counters.events)
-      .bind(18, o.counters.steps);
+      .bind(16, o.counters.time_steps)
+      .bind(17, o.counters.collisions)
+      .bind(18, o.counters.contacts)
+      .bind(19, o.counters.riding_spheres);
   insert.run();
 }
 
@@ -150,9 +152,10 @@ SampleRecord read_sample(const sqlite::Statement& row) {
   e.dissipated_friction_J = row.column_double(11);
   e.dissipated_viscous_J = row.column_double(12);
   sample.energy_balance_rel_err = row.column_double(13);
-  o.counters.contacts = row.column_int(14);
-  o.counters.events = row.column_int(15);
-  o.counters.steps = row.column_int(16);
+  o.counters.time_steps = row.column_optional_int(14);
+  o.counters.collisions = row.column_optional_int(15);
+  o.counters.contacts = row.column_optional_int(16);
+  o.counters.riding_spheres = row.column_optional_int(17);
   return sample;
 }
 
@@ -275,7 +278,7 @@ void RunStore::append_results(std::int64_t run_id, std::span<const SampleRecord>
                               std::span<const CycleRecord> cycles, const RunCheckpoint* checkpoint) {
   sqlite::write_transaction(*db_, [&] {
     sqlite::Statement sample(*db_, "INSERT INTO samples (run_id, " + std::string(sample_columns) +
-                                       ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+                                       ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (const SampleRecord& s : samples) insert_sample(sample, run_id, s);
     sqlite::Statement cycle(*db_, "INSERT INTO cycles (run_id, " + std::string(cycle_columns) +
                                       ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");

@@ -501,10 +501,54 @@ FROM study_points p JOIN study_frf_points f ON f.study_id = p.study_id AND f.poi
 LEFT JOIN study_frf_metrics m ON m.study_id = p.study_id AND m.point = p.point;
 )sql";
 
-constexpr std::array<std::string_view, 11> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
+/// The engines' counters, each with one meaning (EngineCounters), NULL where the run's
+/// engine does not keep it: the soft engine's time steps and open contacts, the hard
+/// engine's collisions and spheres riding the host. Older samples are mapped by their
+/// run's model (steps and contacts of a soft run; events and contacts, which were its
+/// riders, of a hard run); a run without spheres ran the host alone and kept none. The
+/// views that read samples resolve to the new table by name (legacy_alter_table).
+constexpr std::string_view v12_engine_counters = R"sql(
+PRAGMA legacy_alter_table = ON;
+CREATE TABLE samples_v12 (
+  run_id                     INTEGER NOT NULL REFERENCES runs (run_id) ON DELETE CASCADE,
+  t_s                        REAL NOT NULL,
+  host_z_m                   REAL NOT NULL,
+  host_v_m_s                 REAL NOT NULL,
+  particle_translational_J   REAL NOT NULL,
+  particle_rotational_J      REAL NOT NULL,
+  host_kinetic_J             REAL NOT NULL,
+  spring_potential_J         REAL NOT NULL,
+  gravitational_potential_J  REAL NOT NULL,
+  contact_elastic_J          REAL NOT NULL,
+  excitation_work_J          REAL NOT NULL,
+  dissipated_impact_J        REAL NOT NULL,
+  dissipated_friction_J      REAL NOT NULL,
+  dissipated_viscous_J       REAL NOT NULL,
+  energy_balance_rel_err     REAL NOT NULL,
+  time_steps                 INTEGER,  -- cumulative (soft)
+  collisions                 INTEGER,  -- cumulative (hard)
+  contacts                   INTEGER,  -- open at this instant (soft)
+  riding_spheres             INTEGER,  -- riding the host at this instant (hard)
+  PRIMARY KEY (run_id, t_s)
+) STRICT, WITHOUT ROWID;
+INSERT INTO samples_v12
+SELECT s.run_id, s.t_s, s.host_z_m, s.host_v_m_s, s.particle_translational_J, s.particle_rotational_J,
+       s.host_kinetic_J, s.spring_potential_J, s.gravitational_potential_J, s.contact_elastic_J, s.excitation_work_J,
+       s.dissipated_impact_J, s.dissipated_friction_J, s.dissipated_viscous_J, s.energy_balance_rel_err,
+       CASE WHEN r.model = 'soft' AND r.n_particles > 0 THEN s.steps END,
+       CASE WHEN r.model = 'hard' AND r.n_particles > 0 THEN s.events END,
+       CASE WHEN r.model = 'soft' AND r.n_particles > 0 THEN s.contacts END,
+       CASE WHEN r.model = 'hard' AND r.n_particles > 0 THEN s.contacts END
+FROM samples s LEFT JOIN runs r USING (run_id);
+DROP TABLE samples;
+ALTER TABLE samples_v12 RENAME TO samples;
+PRAGMA legacy_alter_table = OFF;
+)sql";
+
+constexpr std::array<std::string_view, 12> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
                                                v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused,
                                                v7_run_snapshots,       v8_studies,        v9_study_jobs,
-                                               v10_run_checkpoints,    v11_frf_studies};
+                                               v10_run_checkpoints,    v11_frf_studies,   v12_engine_counters};
 
 }  // namespace
 

@@ -213,6 +213,11 @@ std::optional<double> Statement::column_optional_double(int column) const {
   return column_double(column);
 }
 
+std::optional<std::int64_t> Statement::column_optional_int(int column) const {
+  if (is_null(column)) return std::nullopt;
+  return column_int(column);
+}
+
 int Statement::column_count() const { return sqlite3_column_count(stmt_); }
 
 bool Statement::same_value(int column, const Statement& other, int other_column) const {

@@ -2,6 +2,7 @@
 /// What an engine reports: the same types from both engines.
 
 #include <cstdint>
+#include <optional>
 
 #include "pdamp/model/energy_ledger.hpp"
 #include "pdamp/model/host.hpp"
@@ -10,10 +11,12 @@
 
 namespace pdamp {
 
+/// What an engine counts, each with one meaning; empty where the engine does not keep it.
 struct EngineCounters {
-  std::int64_t steps = 0;     ///< time steps taken (soft engine), cumulative
-  std::int64_t events = 0;    ///< collisions processed (hard engine), cumulative
-  std::int64_t contacts = 0;  ///< contacts open at this instant
+  std::optional<std::int64_t> time_steps;      ///< time steps taken, cumulative (soft engine)
+  std::optional<std::int64_t> collisions;      ///< collisions processed, cumulative (hard engine)
+  std::optional<std::int64_t> contacts;        ///< contacts open at this instant (soft engine)
+  std::optional<std::int64_t> riding_spheres;  ///< spheres riding the host at this instant (hard engine)
   bool operator==(const EngineCounters&) const = default;
 };
 

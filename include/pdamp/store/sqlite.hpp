@@ -120,6 +120,7 @@ class Statement {
   std::int64_t column_int(int column) const;
   std::string column_text(int column) const;
   std::optional<double> column_optional_double(int column) const;
+  std::optional<std::int64_t> column_optional_int(int column) const;
   std::vector<std::byte> column_blob(int column) const;
   int column_count() const;
   /// Whether `column` holds the same type and bits as `other_column` of another statement's

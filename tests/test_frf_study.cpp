@@ -293,8 +293,9 @@ TEST_CASE("a point's final state and its completion are one transaction: refused
   const std::int64_t beds = count_rows(db, "SELECT count(*) FROM initial_states");
   // As if another process had taken the point: its completion is refused, and the final
   // state it carried is not left behind.
-  store.database().exec("DELETE FROM study_frf_metrics; DELETE FROM study_point_states;");
-  store.database().exec("UPDATE study_points SET status = 'interrupted'");
+  sqlite::Database other(db);
+  other.exec("DELETE FROM study_frf_metrics; DELETE FROM study_point_states;");
+  other.exec("UPDATE study_points SET status = 'interrupted'");
   CHECK_THROWS_AS(studies.complete_frf_point(1, 1, 1, *rows[0].result, Particles(3), 0.0), RuntimeFailure);
   CHECK(count_rows(db, "SELECT count(*) FROM initial_states") == beds);
   CHECK(count_rows(db, "SELECT count(*) FROM study_frf_metrics") == 0);

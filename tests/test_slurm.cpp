@@ -205,7 +205,8 @@ TEST_CASE("a program runs without a shell, its output and exit code captured, an
 TEST_CASE("collect merges every table a shard's point has, and leaves the study's definition alone") {
   test::TempDir dir("slurm-tables");
   RunStore store(dir / "runs.sqlite");
-  sqlite::Statement tables(store.database(), "SELECT name FROM sqlite_schema WHERE type = 'table' ORDER BY name");
+  sqlite::Database db(store.file());
+  sqlite::Statement tables(db, "SELECT name FROM sqlite_schema WHERE type = 'table' ORDER BY name");
   int n = 0;
   while (tables.step()) {
     const std::string name = tables.column_text(0);
@@ -255,6 +256,29 @@ void tamper(const std::filesystem::path& shard, const std::string& sql) {
 }
 
 }  // namespace
+
+TEST_CASE("the store's functions for the Slurm layer: the next study id, a self-contained file, a template's studies") {
+  test::TempDir dir("slurm-store");
+  {
+    RunStore empty(dir / "empty.sqlite");
+    CHECK(StudyStore(empty).next_study_id() == 1);
+    empty.make_self_contained();
+    sqlite::Database db(empty.file(), sqlite::Access::snapshot);
+    sqlite::Statement mode(db, "PRAGMA journal_mode");
+    REQUIRE(mode.step());
+    CHECK(mode.column_text(0) == "delete");
+  }
+  CHECK_FALSE(std::filesystem::exists(dir / "empty.sqlite-wal"));
+  ShardedStudy s(dir, "ids", 2, "runs.sqlite");
+  CHECK(StudyStore(s.store).next_study_id() == s.id + 1);
+  // The template the tasks read: whole by itself, the study as the store holds it.
+  CHECK_FALSE(std::filesystem::exists(s.folder.template_store().string() + "-wal"));
+  const StoreFileStudies held = read_store_studies(s.folder.template_store());
+  CHECK(held.schema_version == RunStore::schema_version());
+  REQUIRE(held.studies.size() == 1);
+  CHECK(held.studies[0].study_id == s.id);
+  CHECK(held.studies[0].name == "ids");
+}
 
 TEST_CASE("collect merges finished shards once, shares their beds, keeps completed points and refuses strangers") {
   test::TempDir dir("slurm-collect");

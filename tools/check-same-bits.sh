@@ -104,10 +104,13 @@ columns() {
     INTERSECT SELECT name FROM pragma_table_info('$3', 'old')"
 }
 
+# The store's schema version.
+schema() { sqlite3 "$1" "PRAGMA user_version"; }
+
 # Compares table $1 of run $5 in store $3 (before) with run $6 in store $4 (now), row by
 # row in the order of column $2: prints what differs, column by column (the columns both
-# have; when the new binary's schema renamed some, the old run as it migrated them is
-# compared too, in the new store).
+# have). When the new binary's schema differs, the samples compared are the old run's as
+# the new binary migrated them, in its store.
 compare_rows() {
   local table=$1 order=$2 store_old=$3 store_new=$4 a=$5 b=$6 per_column="" c
   for c in $(columns "$store_old" "$store_new" "$table"); do
@@ -141,12 +144,10 @@ for k in "${!names[@]}"; do
   sqlite3 "$dir/old.sqlite" ".backup '$dir/new.sqlite'"  # with the bed the old run started from
   b=$(run_case "$new" "$k" "$dir/new.sqlite") || { failed=1; continue; }
   differences=$(
-    compare_rows samples t_s "$dir/old.sqlite" "$dir/new.sqlite" "$a" "$b"
-    renamed=$(sqlite3 "$dir/new.sqlite" "ATTACH '$dir/old.sqlite' AS old;
-      SELECT group_concat(name, ' ') FROM (SELECT name FROM pragma_table_info('samples', 'main')
-        EXCEPT SELECT name FROM pragma_table_info('samples', 'old'))")
-    if [ -n "$renamed" ]; then
-      compare_rows samples t_s "$dir/new.sqlite" "$dir/new.sqlite" "$a" "$b" | sed "s/^/(migrated) /"
+    if [ "$(schema "$dir/old.sqlite")" = "$(schema "$dir/new.sqlite")" ]; then
+      compare_rows samples t_s "$dir/old.sqlite" "$dir/new.sqlite" "$a" "$b"
+    else  # the old run as the new binary migrated it (new.sqlite is a copy of old.sqlite)
+      compare_rows samples t_s "$dir/new.sqlite" "$dir/new.sqlite" "$a" "$b" | sed 's/^/(migrated) /'
     fi
     compare_rows cycles cycle "$dir/old.sqlite" "$dir/new.sqlite" "$a" "$b"
     sqlite3 -separator ' ' "$dir/new.sqlite" "ATTACH '$dir/old.sqlite' AS old;

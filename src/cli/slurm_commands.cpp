@@ -162,10 +162,7 @@ std::pair<std::int64_t, std::vector<std::int64_t>> planned(const std::string& db
       }
       stored = record->study_id;
     } else {
-      sqlite::Statement next(store.database(),
-                             "SELECT coalesce(max(seq), 0) + 1 FROM sqlite_sequence WHERE name = 'studies'");
-      next.step();
-      return {next.column_int(0), all};
+      return {StudyStore(store).next_study_id(), all};
     }
   }
   ClusterStudy cluster(std::to_string(stored), db, StoreAccess::read);

@@ -76,7 +76,7 @@ struct OpenStudy {
   StudyRecord find() {
     auto found = studies.study(id);
     if (!found) {
-      throw InputError("study " + std::to_string(id) + " is not in '" + store.database().file().string() +
+      throw InputError("study " + std::to_string(id) + " is not in '" + store.file().string() +
                        "' (see 'pdamp study list')");
     }
     return *found;

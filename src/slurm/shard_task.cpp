@@ -8,6 +8,7 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/store/process_lease.hpp"
+#include "pdamp/store/shard_merge.hpp"
 #include "pdamp/store/study_store.hpp"
 
 namespace pdamp::slurm {
@@ -50,7 +51,7 @@ study::PointResult run_in_shard(const std::filesystem::path& work, const study::
   studies.begin_task(record.study_id, task);
   const study::PointResult result = study::run_study_point(store, record.study_id, study, point.point, control);
   studies.end_task(record.study_id, r.job, r.task, result.status, result.message);
-  store.database().exec("PRAGMA journal_mode = DELETE");  // one self-contained file
+  store.make_self_contained();
   return result;
 }
 
@@ -64,7 +65,7 @@ void write_folder_study(const ShardFolder& folder, const StudyRecord& study) {
     options.single_process = true;
     RunStore store(part, StoreAccess::write, options);
     StudyStore(store).copy_study(study);
-    store.database().exec("PRAGMA journal_mode = DELETE");
+    store.make_self_contained();
   }
   sync(part);
   std::filesystem::rename(part, folder.template_store());
@@ -75,15 +76,12 @@ StudyRecord folder_study(const ShardFolder& folder) {
   if (!std::filesystem::is_regular_file(file)) {
     throw InputError("'" + file.string() + "' is missing: a shard folder's study is written by 'pdamp study submit'");
   }
-  sqlite::Database db(file, sqlite::Access::snapshot);
-  sqlite::Statement version(db, "PRAGMA user_version");
-  version.step();
-  if (version.column_int(0) != RunStore::schema_version()) {
-    throw InputError("'" + file.string() + "' has schema version " + std::to_string(version.column_int(0)) +
-                     ", this pdamp " + std::to_string(RunStore::schema_version()) +
+  const auto [version, studies] = read_store_studies(file);
+  if (version != RunStore::schema_version()) {
+    throw InputError("'" + file.string() + "' has schema version " + std::to_string(version) + ", this pdamp " +
+                     std::to_string(RunStore::schema_version()) +
                      ": the job script must run the pdamp that submitted it");
   }
-  auto studies = StudyStore(db).studies();
   if (studies.size() != 1) throw InputError("'" + file.string() + "' does not hold one study");
   return studies.front();
 }

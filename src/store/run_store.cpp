@@ -478,6 +478,8 @@ RunResults RunStore::results(std::int64_t run_id) {
 
 const std::filesystem::path& RunStore::file() const { return db_->file(); }
 
+void RunStore::make_self_contained() { db_->exec("PRAGMA journal_mode = DELETE"); }
+
 std::optional<SnapshotRecord> RunStore::snapshots(std::int64_t run_id) {
   sqlite::Statement query(*db_, "SELECT folder, collection, interval_s, frames FROM run_snapshots WHERE run_id = ?");
   query.bind(1, run_id);

@@ -383,6 +383,11 @@ class Merger {
 
 }  // namespace
 
+StoreFileStudies read_store_studies(const std::filesystem::path& file) {
+  sqlite::Database db(file, sqlite::Access::snapshot);
+  return {static_cast<int>(integer(db, "PRAGMA user_version")), StudyStore(db).studies()};
+}
+
 std::span<const std::string_view> merged_tables() { return merged; }
 std::span<const std::string_view> unmerged_tables() { return unmerged; }
 

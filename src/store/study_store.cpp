@@ -176,6 +176,12 @@ std::vector<StudyRecord> StudyStore::studies() {
   return records;
 }
 
+std::int64_t StudyStore::next_study_id() {
+  sqlite::Statement next(db(), "SELECT coalesce(max(seq), 0) + 1 FROM sqlite_sequence WHERE name = 'studies'");
+  next.step();
+  return next.column_int(0);
+}
+
 std::vector<StudySummary> StudyStore::list_studies() {
   sqlite::Statement q(db(), std::string(summary_columns) + " ORDER BY study_id");
   std::vector<StudySummary> studies;

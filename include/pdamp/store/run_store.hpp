@@ -21,6 +21,9 @@
 
 namespace pdamp {
 
+struct ShardMerge;
+struct StudyRecord;
+
 enum class RunStatus { running, completed, failed, interrupted };
 std::string_view to_string(RunStatus status);
 
@@ -253,11 +256,15 @@ class RunStore {
 
   const std::filesystem::path& file() const;
 
-  /// The connection, for the store's other classes (StudyStore) and for the Slurm shards'
-  /// own SQL (src/slurm, src/cli/slurm_commands.cpp), which still write through it.
-  sqlite::Database& database() { return *db_; }
+  /// Makes the file whole by itself (journal_mode DELETE: no -wal or -shm beside it), for
+  /// a store that is copied or moved once written: a Slurm shard, a study's template.
+  void make_self_contained();
 
  private:
+  // The store layer's other parts share the connection; no other layer writes SQL.
+  friend class StudyStore;
+  friend ShardMerge merge_shard(RunStore& store, const StudyRecord& study, const std::filesystem::path& file);
+  sqlite::Database& database() { return *db_; }
   void migrate();
   /// Replaces the run's checkpoint (within a transaction).
   void replace_checkpoint(std::int64_t run_id, const RunCheckpoint& checkpoint);

@@ -9,6 +9,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "pdamp/store/run_store.hpp"
 #include "pdamp/store/study_store.hpp"
@@ -25,6 +26,14 @@ struct ShardMerge {
   int beds_added = 0;              ///< settled beds added
   int beds_shared = 0;             ///< settled beds the store held already, the same bits
 };
+
+/// A store file as it is (read from a snapshot, never migrated or written): its schema
+/// version and its studies. For a shard folder's template, which the tasks check.
+struct StoreFileStudies {
+  int schema_version = 0;
+  std::vector<StudyRecord> studies;
+};
+StoreFileStudies read_store_studies(const std::filesystem::path& file);
 
 /// The tables a shard's rows are merged into, and those left alone: the study's
 /// definition, which must be the store's (studies, study_point_values), and the store's own

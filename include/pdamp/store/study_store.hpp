@@ -147,6 +147,8 @@ class StudyStore {
   std::optional<StudyRecord> study(std::int64_t study_id);
   /// Every stored study, by id (a shard store holds one).
   std::vector<StudyRecord> studies();
+  /// The id create_study would give the next study (ids are never reused).
+  std::int64_t next_study_id();
   std::vector<StudySummary> list_studies();
   std::optional<StudySummary> summary(std::int64_t study_id);
   std::vector<StudyPointState> points(std::int64_t study_id);

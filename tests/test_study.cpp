@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "pdamp/errors.hpp"
-#include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/study_store.hpp"
 #include "pdamp/study/study.hpp"

@@ -19,7 +19,7 @@
 #include "pdamp/hard/event_queue.hpp"
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
-#include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/sim/engine_factory.hpp"
 
 namespace pdamp::test {

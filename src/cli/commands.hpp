@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/sim/snapshots.hpp"
 
 namespace pdamp {

@@ -9,7 +9,7 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
-#include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 
 namespace pdamp {
 namespace {

@@ -8,8 +8,8 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/input_file.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/scenario/ini.hpp"
-#include "pdamp/scenario/scenario_loader.hpp"
 #include "pdamp/sim/stored_run.hpp"
 
 namespace pdamp::study {

@@ -8,8 +8,8 @@
 #include <sstream>
 
 #include "pdamp/errors.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/scenario/ini.hpp"
-#include "pdamp/scenario/scenario_loader.hpp"
 
 namespace pdamp::study {
 

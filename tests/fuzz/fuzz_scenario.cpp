@@ -14,7 +14,7 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
-#include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/sim/run_budget.hpp"
 #include "pdamp/soft/time_step.hpp"
 

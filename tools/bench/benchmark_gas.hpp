@@ -9,7 +9,7 @@
 #include <numbers>
 #include <string>
 
-#include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 
 namespace pdamp::bench {
 

@@ -1,4 +1,4 @@
-#include "pdamp/scenario/scenario_loader.hpp"
+#include "pdamp/model/scenario_loader.hpp"
 
 #include <algorithm>
 #include <array>

@@ -130,7 +130,7 @@ TEST_CASE("[frf] mistakes: one message naming the line, the key and what is vali
             "'host.zz' is not a scenario key"},
            {head + "[frf]\nmode = force\nlevels = 1\n", "[frf] needs frequencies"},
            {head + "[sweep]\nhost.z0_m = 1, 2\n[frf]\nmode = force\nlevels = 1\nfrequencies = 10\n",
-            "a study has [sweep] or [frf] sections, not both"},
+            "a study has sections of one kind, [sweep], [frf] or [characterise]"},
        }) {
     CAPTURE(bad.text);
     CHECK(error_of([&] { parse_study_file(bad.text, "test.ini", "t"); }).find(bad.message) != std::string::npos);

@@ -151,7 +151,7 @@ TEST_CASE("study files: every mistake is one message naming the line, the key an
            {head + "[sweep]\nzip = host.z0_m host.v0_m_s\nzip = host.z0_m run.duration_s\n",
             "host.z0_m is already in another zip"},
            {head + "[sweep]\n", "test.ini, line 4: [sweep] has no keys"},
-           {head, "no [sweep] or [frf] section"},
+           {head, "no [sweep], [frf] or [characterise] section"},
            {head + "[sweeps]\nhost.z0_m = 1\n", "test.ini, line 4: unknown section [sweeps]"},
            {head + "[sweep.]\nhost.z0_m = 1\n", "unknown section [sweep.]"},
            {head + "[sweep]\nhost.z0_m = 1\n[sweep]\nhost.v0_m_s = 1\n", "[sweep] appears twice (first on line 4)"},
@@ -307,8 +307,8 @@ TEST_CASE("the study tables round-trip: points and values, claims and attempts, 
   RunStore store(dir / "runs.sqlite");
   StudyStore studies(store);
   const std::vector<NewStudyPoint> points{
-      {1, "sweep", {{"particles.count", "10"}, {"particles.diameter_m", "1 2"}}, std::nullopt},
-      {2, "sweep", {{"particles.count", "20"}, {"particles.diameter_m", "1 2"}}, std::nullopt}};
+      {1, "sweep", {{"particles.count", "10"}, {"particles.diameter_m", "1 2"}}, std::nullopt, std::nullopt},
+      {2, "sweep", {{"particles.count", "20"}, {"particles.diameter_m", "1 2"}}, std::nullopt, std::nullopt}};
   const auto id = studies.create_study({"s", "both", "/s.ini", "study text", "/b.ini", "base text"}, points);
   CHECK(studies.find_study("s")->study_id == id);
   CHECK(!studies.find_study("t"));

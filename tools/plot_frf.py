@@ -10,13 +10,10 @@ usage: tools/plot_frf.py --study ID [--db pdamp.sqlite] [--out FILE.png|.svg]
 """
 import argparse
 import math
-import sqlite3
-import sys
 
+from plot_common import fail, open_study, pyplot, save
 
-def fail(message, code=2):
-    print(f"plot_frf: {message}", file=sys.stderr)
-    sys.exit(code)
+PROGRAM = "plot_frf"
 
 
 def curves(db, study):
@@ -37,20 +34,11 @@ def main():
     parser.add_argument("--study", type=int, required=True)
     parser.add_argument("--out")
     args = parser.parse_args()
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        fail("matplotlib is missing: install Debian's python3-matplotlib (tools/setup.sh python3-matplotlib)", 1)
-
-    db = sqlite3.connect(f"file:{args.db}?mode=ro", uri=True)
-    row = db.execute("SELECT name FROM studies WHERE study_id = ?", (args.study,)).fetchone()
-    if row is None:
-        fail(f"study {args.study} is not in {args.db} (see 'pdamp study list')")
+    plt = pyplot(PROGRAM)
+    db, row = open_study(PROGRAM, args.db, args.study)
     found = curves(db, args.study)
     if not found:
-        fail(f"study {args.study} has no completed frequency-response point to draw", 1)
+        fail(PROGRAM, f"study {args.study} has no completed frequency-response point to draw", 1)
     levels = sorted({c[4] for c in found.values() if not c[2]})
     colour = {level: f"C{i}" for i, level in enumerate(levels)}
     base = any(c[3] == "base" for c in found.values())
@@ -90,10 +78,7 @@ def main():
         ax.set_xscale("log")
         ax.grid(True, alpha=0.3)
     amp.legend(fontsize="x-small", ncol=2)
-    fig.tight_layout()
-    out = args.out or f"study-{args.study}.png"
-    fig.savefig(out, dpi=110)
-    print(out)
+    save(fig, args.out, args.study)
 
 
 if __name__ == "__main__":

@@ -8,8 +8,8 @@ usage: tools/plot_study.py --study ID [--db pdamp.sqlite] [--metric psi_peak] [-
        (default x: the section's key with the most values; default out: study-ID.png)
 """
 import argparse
-import sqlite3
-import sys
+
+from plot_common import fail as fail_with, open_study, pyplot, save
 
 METRICS = {
     "psi_peak": "peak specific damping capacity psi",
@@ -26,8 +26,7 @@ METRICS = {
 
 
 def fail(message, code=2):
-    print(f"plot_study: {message}", file=sys.stderr)
-    sys.exit(code)
+    fail_with("plot_study", message, code)
 
 
 def load(db, study):
@@ -111,18 +110,8 @@ def main():
     args = parser.parse_args()
     if args.metric not in METRICS:
         fail(f"--metric '{args.metric}' is not a metric; choose one of {', '.join(METRICS)}")
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        fail("matplotlib is missing: install Debian's python3-matplotlib (tools/setup.sh python3-matplotlib)", 1)
-
-    db = sqlite3.connect(f"file:{args.db}?mode=ro", uri=True)
-    row = db.execute("SELECT name, models FROM studies WHERE study_id = ?", (args.study,)).fetchone()
-    if row is None:
-        fail(f"study {args.study} is not in {args.db} (see 'pdamp study list')")
-    name, models = row
+    plt = pyplot("plot_study")
+    db, (name, models) = open_study("plot_study", args.db, args.study, "name, models")
     points = load(db, args.study)
     metric_rows = {(point, model): y for point, model, y in db.execute(
         f"SELECT point, model, {args.metric} FROM study_results WHERE study_id = ? AND status = 'completed' "
@@ -139,10 +128,7 @@ def main():
     for ax, section in zip(axes[:, 0], sections):
         draw_section(ax, section, {p: v for p, v in points.items() if v[0] == section}, metric_rows, args.metric,
                      args.x)
-    fig.tight_layout()
-    out = args.out or f"study-{args.study}.png"
-    fig.savefig(out, dpi=110)
-    print(out)
+    save(fig, args.out, args.study)
 
 
 if __name__ == "__main__":

@@ -21,6 +21,17 @@ double wrapped_rad(double angle_rad) {
 
 double HarmonicCycle::amplitude_m() const { return std::hypot(z_sin_m, z_cos_m); }
 double HarmonicCycle::phase_rad() const { return std::atan2(z_cos_m, z_sin_m); }
+double HarmonicCycle::load_amplitude_N() const { return std::hypot(load_sin_N, load_cos_N); }
+double HarmonicCycle::load_phase_rad() const { return std::atan2(load_cos_N, load_sin_N); }
+
+ApparentLoad apparent_load(const HarmonicCycle& cycle, double omega_rad_s) {
+  const double x = cycle.amplitude_m(), phase = cycle.phase_rad(), w = omega_rad_s;
+  // F_p,1 along sin(θ + φ_X) (against z₁'' = −ω² z₁) and along cos(θ + φ_X) (against z₁').
+  const double c = std::cos(phase), s = std::sin(phase);
+  const double in_phase_N = cycle.load_sin_N * c + cycle.load_cos_N * s;
+  const double quadrature_N = -cycle.load_sin_N * s + cycle.load_cos_N * c;
+  return {in_phase_N / (w * w * x), -quadrature_N / (w * x)};
+}
 
 HarmonicCycle first_harmonics(const Observation& start, const Observation& end) {
   const HostLoadIntegrals d = end.host_load - start.host_load;
@@ -35,10 +46,13 @@ HarmonicCycle first_harmonics(const Observation& start, const Observation& end) 
 
 bool SteadyStateDetector::add(const HarmonicCycle& cycle) {
   if (cycles_ > 0) {
-    const double x = cycle.amplitude_m();
-    const bool amplitude_still = std::abs(x - last_.amplitude_m()) <= criterion_.amplitude_tolerance * x;
-    const bool phase_still =
-        std::abs(wrapped_rad(cycle.phase_rad() - last_.phase_rad())) <= criterion_.phase_tolerance_rad;
+    const bool load = watch_ == SteadyWatch::load;
+    const double x = load ? cycle.load_amplitude_N() : cycle.amplitude_m();
+    const double x_before = load ? last_.load_amplitude_N() : last_.amplitude_m();
+    const double phase_change =
+        load ? cycle.load_phase_rad() - last_.load_phase_rad() : cycle.phase_rad() - last_.phase_rad();
+    const bool amplitude_still = std::abs(x - x_before) <= criterion_.amplitude_tolerance * x;
+    const bool phase_still = std::abs(wrapped_rad(phase_change)) <= criterion_.phase_tolerance_rad;
     streak_ = amplitude_still && phase_still ? streak_ + 1 : 0;
   }
   last_ = cycle;
@@ -87,12 +101,9 @@ ResponseMetrics response_metrics(const std::vector<Observation>& boundaries, con
   const double d_cycle = m.impact_J_per_cycle + m.friction_J_per_cycle + m.viscous_J_per_cycle;
   m.loss_factor = d_cycle / (2.0 * std::numbers::pi * 0.5 * drive.stiffness_N_m * stretch_m * stretch_m);
 
-  // F_p,1 along sin(θ + φ_X) (against z₁'' = −ω² z₁) and along cos(θ + φ_X) (against z₁').
-  const double c = std::cos(m.phase_rad), s = std::sin(m.phase_rad);
-  const double in_phase_N = all.load_sin_N * c + all.load_cos_N * s;
-  const double quadrature_N = -all.load_sin_N * s + all.load_cos_N * c;
-  m.apparent_mass_kg = in_phase_N / (w * w * m.amplitude_m);
-  m.equivalent_damping_N_s_m = -quadrature_N / (w * m.amplitude_m);
+  const ApparentLoad load = apparent_load(all, w);
+  m.apparent_mass_kg = load.mass_kg;
+  m.equivalent_damping_N_s_m = load.damping_N_s_m;
   return m;
 }
 

@@ -183,7 +183,7 @@ std::string job_line(std::int64_t job, const std::vector<std::int64_t>& points) 
 }
 
 int dry_run(const std::string& db, const study::Study& study, const SlurmOptions& options) {
-  study::refuse_frf_study(study, "study submit");
+  study::refuse_curve_study(study, "study submit");
   const auto [id, points] = planned(db, study);
   if (points.empty()) {
     std::cerr << "pdamp: dry run: study " << id << " has no point to submit\n";
@@ -313,14 +313,14 @@ int study_submit(const std::vector<std::string>& args) {
     if (vm.count("dry-run"))
       return dry_run(db, OpenStudy(vm["resume"].as<std::string>(), db, StoreAccess::read).study, options);
     ClusterStudy cluster(vm["resume"].as<std::string>(), db, StoreAccess::modify);
-    study::refuse_frf_study(cluster.open.study, "study submit");
+    study::refuse_curve_study(cluster.open.study, "study submit");
     check_study_files(cluster.open);
     return submit_points(cluster, options);
   }
   // Everything that can be wrong with the study is found before the store is touched.
   study::Study study =
       study::make_study(study::read_study_source(vm["STUDY.ini"].as<std::string>()), vm.count("force") > 0);
-  study::refuse_frf_study(study, "study submit");
+  study::refuse_curve_study(study, "study submit");
   study::validate_study(study);
   if (vm.count("dry-run")) return dry_run(db, study, options);
   if (!find_program("sbatch")) {

@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <numbers>
 #include <sstream>
 
 #include "commands.hpp"
@@ -43,7 +44,8 @@ constexpr const char* study_usage =
     "  show STUDY_ID [--db FILE]         every point of a study: values, status, metrics\n"
     "  plot STUDY_ID [--metric M] [--x KEY] [--out FILE.png] [--db FILE]\n"
     "          draw a metric against a swept key, one curve per model (python3-matplotlib); an\n"
-    "          [frf] study: amplitude and phase against frequency, m_app and c_eq against Gamma\n"
+    "          [frf] study: amplitude and phase against frequency, m_app and c_eq against Gamma;\n"
+    "          a [characterise] study: m_app/m_p and c_eq/(m_p w) against Gamma, a curve per frequency\n"
     "  run-point STUDY_ID POINT [--threads N] [--db FILE]\n"
     "          run one point of a stored study in this process (what each worker runs)\n"
     "  submit STUDY.ini --slurm [--partition P] [--account A] [--time T] [--max-parallel K]\n"
@@ -57,8 +59,9 @@ constexpr const char* study_usage =
     "          run one task of a job array into its shard store (what the job script runs)\n"
     "\n"
     "A study file names a base scenario, the model(s) and [sweep] sections of scenario keys and\n"
-    "their values (data/studies/table4.ini), or [frf] sections of stepped-sine frequency\n"
-    "responses (data/studies/table1_frf.ini).\n";
+    "their values (data/studies/table4.ini), [frf] sections of stepped-sine frequency\n"
+    "responses (data/studies/table1_frf.ini), or [characterise] sections driving the damper's\n"
+    "container over a grid of amplitude and frequency (data/studies/table1_characterise.ini).\n";
 
 /// The point's message and, if its process is gone, how to run it again.
 void point_messages(const StudyPointState& p, std::int64_t id, std::vector<std::string>& messages) {
@@ -116,6 +119,54 @@ void print_frf_points(StudyStore& studies, std::int64_t id, std::ostream& out) {
   for (const auto& message : messages) out << printable(message) << "\n";
 }
 
+/// A characterisation's points: one line each, on its curve, with its metrics.
+void print_characterise_points(StudyStore& studies, std::int64_t id, std::ostream& out) {
+  TextTable table({{"point", true},
+                   {"curve", true},
+                   {"model"},
+                   {"A_m", true},
+                   {"f_Hz", true},
+                   {"status"},
+                   {"settled"},
+                   {"cycles", true},
+                   {"Gamma", true},
+                   {"A/L", true},
+                   {"m_app/m_p", true},
+                   {"c_eq/(m_p w)", true},
+                   {"eta", true},
+                   {"floor", true},
+                   {"lid", true},
+                   {"wall_s", true}});
+  std::vector<std::string> messages;
+  const auto states = studies.points(id);
+  for (const auto& c : studies.characterise_points(id)) {
+    std::vector<std::string> row{std::to_string(c.point),
+                                 std::to_string(c.place.curve),
+                                 c.place.model + (c.place.empty ? " empty" : ""),
+                                 format_number(c.place.amplitude_m),
+                                 format_number(c.place.frequency_hz),
+                                 c.status};
+    if (const auto& r = c.result) {
+      const CharacterisationMetrics& m = r->metrics;
+      const double m_p = r->particle_mass_kg;
+      const double omega_rad_s = 2.0 * std::numbers::pi * c.place.frequency_hz;
+      auto ratio = [&](double x, double by) { return m_p > 0 ? std::optional(x / by) : std::nullopt; };
+      row.insert(row.end(), {m.settled ? "yes" : "no", std::to_string(r->cycles_run), format_number(m.gamma, 3),
+                             format_number(m.amplitude_m / r->free_height_m, 3),
+                             format_optional(ratio(m.apparent_mass_kg, m_p), 3),
+                             format_optional(ratio(m.equivalent_damping_N_s_m, m_p * omega_rad_s), 3),
+                             format_number(m.loss_factor, 3), format_number(m.floor_contact_fraction, 2),
+                             format_number(m.lid_contact_fraction, 2), format_number(r->wall_time_s, 3)});
+    } else {
+      row.resize(16, "-");
+    }
+    table.add_row(row);
+    point_messages(states.at(static_cast<std::size_t>(c.point - 1)), id, messages);
+  }
+  table.print(out);
+  for (const auto& message : messages) out << printable(message) << "\n";
+}
+
 void print_study(StudyStore& studies, std::int64_t id, const Study& study, std::ostream& out) {
   const auto summary = studies.summary(id);
   out << "study " << id << " '" << printable(study.file.name) << "': models " << to_string(study.file.models) << ", "
@@ -125,6 +176,10 @@ void print_study(StudyStore& studies, std::int64_t id, const Study& study, std::
       << printable(study.source.scenario_path.string()) << "\n";
   if (!study.file.frfs.empty()) {
     print_frf_points(studies, id, out);
+    return;
+  }
+  if (!study.file.characterisations.empty()) {
+    print_characterise_points(studies, id, out);
     return;
   }
   std::map<int, std::vector<PointMetrics>> metrics;
@@ -351,17 +406,22 @@ int study_plot(const std::vector<std::string>& args) {
   const OpenStudy open(vm, "study plot", StoreAccess::read);
   const std::int64_t id = open.id;
   const bool frf = !open.study.file.frfs.empty();
-  if (frf && (!vm["metric"].defaulted() || vm.count("x"))) {
+  const bool characterisation = !open.study.file.characterisations.empty();
+  if ((frf || characterisation) && (!vm["metric"].defaulted() || vm.count("x"))) {
     throw InputError("--metric and --x are for [sweep] studies; study " + std::to_string(id) +
-                     " is a frequency response, drawn as its amplitude, phase, m_app and c_eq");
+                     (frf ? " is a frequency response, drawn as its amplitude, phase, m_app and c_eq"
+                          : " is a characterisation, drawn as m_app/m_p and c_eq/(m_p w) against Gamma"));
   }
   const std::string db = vm["db"].as<std::string>();
-  const std::filesystem::path script = std::filesystem::path(PDAMP_TOOLS_DIR) / (frf ? "plot_frf.py" : "plot_study.py");
+  const std::filesystem::path script =
+      std::filesystem::path(PDAMP_TOOLS_DIR) / (frf                ? "plot_frf.py"
+                                                : characterisation ? "plot_characterisation.py"
+                                                                   : "plot_study.py");
   if (!std::filesystem::exists(script)) {
     throw RuntimeFailure("the plotting script '" + script.string() + "' is missing (it comes with pdamp's sources)");
   }
   std::vector<std::string> python{"/usr/bin/python3", script.string(), "--db", db, "--study", std::to_string(id)};
-  if (!frf) python.insert(python.end(), {"--metric", vm["metric"].as<std::string>()});
+  if (!frf && !characterisation) python.insert(python.end(), {"--metric", vm["metric"].as<std::string>()});
   if (vm.count("x")) python.insert(python.end(), {"--x", vm["x"].as<std::string>()});
   if (vm.count("out")) python.insert(python.end(), {"--out", vm["out"].as<std::string>()});
   std::vector<char*> argv;

@@ -5,53 +5,70 @@
 #include <numbers>
 #include <vector>
 
+#include "pdamp/model/cavity.hpp"
+
 namespace pdamp {
 
-FrfPointOutcome run_frf_point(Engine& engine, const Scenario& scenario, const SteadyStateCriterion& criterion,
-                              const std::function<void(const Observation&)>& at_boundary) {
+SteadyCycles run_to_steady_state(Engine& engine, double omega_rad_s, const SteadyStateCriterion& criterion,
+                                 SteadyWatch watch, const CycleHooks& hooks) {
   const auto wall_start = std::chrono::steady_clock::now();
-  const FrfDrive drive = FrfDrive::of(scenario);
-  const double period_s = 2.0 * std::numbers::pi / drive.omega_rad_s;
+  const double period_s = 2.0 * std::numbers::pi / omega_rad_s;
   Observation now = engine.observe();
   const double t0_s = now.t_s;
-  if (at_boundary) at_boundary(now);
+  if (hooks.at_boundary) hooks.at_boundary(now);
   int cycles = 0;
   // The last n + 1 cycle boundaries: the measured cycles if the point never settles.
   std::deque<Observation> recent{now};
   auto next_cycle = [&] {
     ++cycles;
-    engine.advance_to(t0_s + cycles * period_s);
+    const double t_end_s = t0_s + cycles * period_s;
+    if (hooks.advance_cycle) {
+      hooks.advance_cycle(engine, t_end_s);
+    } else {
+      engine.advance_to(t_end_s);
+    }
     const Observation before = now;
     now = engine.observe();
-    if (at_boundary) at_boundary(now);
+    if (hooks.at_boundary) hooks.at_boundary(now);
     recent.push_back(now);
     if (recent.size() > static_cast<std::size_t>(criterion.measured_cycles) + 1) recent.pop_front();
     return first_harmonics(before, now);
   };
-  SteadyStateDetector detector(criterion);
+  SteadyStateDetector detector(criterion, watch);
   bool settled = false;
   while (!settled && cycles < criterion.max_cycles) settled = detector.add(next_cycle());
-  FrfPointOutcome outcome;
-  std::vector<Observation> measured;
+  SteadyCycles run;
+  run.settled = settled;
   if (settled) {
-    measured.push_back(now);
-    const int cycles_to_steady = cycles;
+    run.measured.push_back(now);
+    run.cycles_to_steady = cycles;
     for (int k = 0; k < criterion.measured_cycles; ++k) {
       next_cycle();
-      measured.push_back(now);
+      run.measured.push_back(now);
     }
-    outcome.metrics = response_metrics(measured, drive, true, cycles_to_steady);
   } else {
-    measured.assign(recent.begin(), recent.end());
-    outcome.metrics = response_metrics(measured, drive, false, cycles - static_cast<int>(measured.size()) + 1);
+    run.measured.assign(recent.begin(), recent.end());
+    run.cycles_to_steady = cycles - static_cast<int>(run.measured.size()) + 1;
   }
-  outcome.cycles_run = cycles;
-  outcome.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  return outcome;
+  run.cycles_run = cycles;
+  run.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return run;
 }
 
-RunOutcome run_frf_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
-                              const RunControl& control, const SteadyStateCriterion& criterion, FrfRun& result) {
+FrfPointOutcome run_frf_point(Engine& engine, const Scenario& scenario, const SteadyStateCriterion& criterion,
+                              const std::function<void(const Observation&)>& at_boundary) {
+  const FrfDrive drive = FrfDrive::of(scenario);
+  const SteadyCycles run =
+      run_to_steady_state(engine, drive.omega_rad_s, criterion, SteadyWatch::displacement, {at_boundary, {}});
+  return {response_metrics(run.measured, drive, run.settled, run.cycles_to_steady), run.cycles_run, run.wall_time_s};
+}
+
+namespace {
+
+/// A point's cycles as a stored run: one sample per boundary, its energy balance checked,
+/// the control's stop and progress; `body` runs the point with the boundary hook given.
+template <typename Body>
+RunOutcome run_cycles_simulation(Engine& engine, RunRecorder& recorder, const RunControl& control, Body&& body) {
   using clock = std::chrono::steady_clock;
   const auto wall_start = clock::now();
   auto next_progress = wall_start;
@@ -75,8 +92,7 @@ RunOutcome run_frf_simulation(Engine& engine, const Scenario& scenario, RunRecor
     }
   };
   try {
-    result.point = run_frf_point(engine, scenario, criterion, at_boundary);
-    result.final_state = engine.state();
+    body(std::function<void(const Observation&)>(at_boundary));
   } catch (const Interrupted&) {
     outcome.status = RunStatus::interrupted;
     outcome.message = "stopped by a signal at t = " + std::to_string(outcome.sim_time_s) + " s";
@@ -92,6 +108,86 @@ RunOutcome run_frf_simulation(Engine& engine, const Scenario& scenario, RunRecor
   }
   outcome.wall_time_s = std::chrono::duration<double>(clock::now() - wall_start).count();
   return outcome;
+}
+
+/// Whether a sphere touches the floor, and the lid: within a thousandth of its radius of
+/// it (a soft contact overlaps, a hard sphere at rest sits at the wall to rounding; one in
+/// flight that close meets the wall within microseconds, far below 1/64 of a cycle).
+struct WallTouch {
+  bool floor = false, lid = false;
+};
+WallTouch wall_touch(const State& state, const Cavity& cavity) {
+  WallTouch touch;
+  const Particles& p = state.particles;
+  const double z_host_m = state.observation.host.z_m;
+  for (Eigen::Index i = 0; i < p.size() && !(touch.floor && touch.lid); ++i) {
+    const Eigen::Vector3d centre = p.position_m.col(i);
+    const double slack_m = 1e-3 * p.radius_m[i];
+    touch.floor = touch.floor || cavity.bottom(centre, p.radius_m[i], z_host_m).gap_m <= slack_m;
+    touch.lid = touch.lid || cavity.top(centre, p.radius_m[i], z_host_m).gap_m <= slack_m;
+  }
+  return touch;
+}
+
+}  // namespace
+
+RunOutcome run_frf_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
+                              const RunControl& control, const SteadyStateCriterion& criterion, FrfRun& result) {
+  return run_cycles_simulation(engine, recorder, control, [&](const std::function<void(const Observation&)>& hook) {
+    result.point = run_frf_point(engine, scenario, criterion, hook);
+    result.final_state = engine.state();
+  });
+}
+
+CharacterisationPointOutcome run_characterisation_point(Engine& engine, const Scenario& scenario,
+                                                        const SteadyStateCriterion& criterion,
+                                                        const std::function<void(const Observation&)>& at_boundary) {
+  const ExcitationSettings& e = scenario.excitation;
+  if (e.mode != ExcitationMode::prescribed_motion) {
+    throw InputError("a characterisation point needs excitation.mode = prescribed");
+  }
+  const double omega_rad_s = e.angular_frequency_rad_s();
+  const Cavity cavity(scenario.cavity);
+  // Each cycle's instants touching the floor and the lid; the measured cycles are the last.
+  std::vector<std::pair<int, int>> touches;
+  CycleHooks hooks{at_boundary, [&](Engine& engine_, double t_end_s) {
+                     const double period_s = 2.0 * std::numbers::pi / omega_rad_s;
+                     const double t_start_s = t_end_s - period_s;
+                     std::pair<int, int> count{0, 0};
+                     for (int k = 1; k <= contact_instants_per_cycle; ++k) {
+                       engine_.advance_to(k == contact_instants_per_cycle
+                                              ? t_end_s
+                                              : t_start_s + period_s * k / contact_instants_per_cycle);
+                       const WallTouch touch = wall_touch(engine_.state(), cavity);
+                       count.first += touch.floor ? 1 : 0;
+                       count.second += touch.lid ? 1 : 0;
+                     }
+                     touches.push_back(count);
+                   }};
+  const SteadyCycles run = run_to_steady_state(engine, omega_rad_s, criterion, SteadyWatch::load, hooks);
+  const double particle_mass_kg = engine.state().particles.total_mass_kg();
+  CharacterisationPointOutcome outcome{characterisation_metrics(run.measured, omega_rad_s, scenario.gravity_m_s2.norm(),
+                                                                particle_mass_kg, run.settled, run.cycles_to_steady),
+                                       run.cycles_run, run.wall_time_s};
+  const auto n = static_cast<std::size_t>(outcome.metrics.measured_cycles);
+  int floor = 0, lid = 0;
+  for (std::size_t k = touches.size() - n; k < touches.size(); ++k) {
+    floor += touches[k].first;
+    lid += touches[k].second;
+  }
+  const double instants = static_cast<double>(n) * contact_instants_per_cycle;
+  outcome.metrics.floor_contact_fraction = floor / instants;
+  outcome.metrics.lid_contact_fraction = lid / instants;
+  return outcome;
+}
+
+RunOutcome run_characterisation_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
+                                           const RunControl& control, const SteadyStateCriterion& criterion,
+                                           CharacterisationRun& result) {
+  return run_cycles_simulation(engine, recorder, control, [&](const std::function<void(const Observation&)>& hook) {
+    result.point = run_characterisation_point(engine, scenario, criterion, hook);
+    result.final_state = engine.state();
+  });
 }
 
 }  // namespace pdamp

@@ -45,7 +45,7 @@ study::PointResult run_in_shard(const std::filesystem::path& work, const study::
   RunStore store(work, StoreAccess::modify, options);
   StudyStore studies(store);
   const study::StudyPoint& point = study.points.at(static_cast<std::size_t>(r.point - 1));
-  studies.add_points(record.study_id, {{point.point, point.section, point.values, std::nullopt}});
+  studies.add_points(record.study_id, {{point.point, point.section, point.values, std::nullopt, std::nullopt}});
   StudyTask task = StudyTask::of(r.job, r.task, point.point);
   task.host = this_process_lease().host;
   studies.begin_task(record.study_id, task);

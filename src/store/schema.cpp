@@ -545,10 +545,72 @@ ALTER TABLE samples_v12 RENAME TO samples;
 PRAGMA legacy_alter_table = OFF;
 )sql";
 
-constexpr std::array<std::string_view, 12> all{v1_runs_samples_cycles, v2_run_statistics, v3_initial_states,
-                                               v4_comparisons,         v5_solid_fraction, v6_run_ids_never_reused,
-                                               v7_run_snapshots,       v8_studies,        v9_study_jobs,
-                                               v10_run_checkpoints,    v11_frf_studies,   v12_engine_counters};
+/// Characterisation studies ([characterise]): each point's place (one model and frequency
+/// per curve, its points along the amplitude axis), its metrics, and the view with the
+/// dimensionless axes. A point's final state goes to study_point_states as an FRF point's.
+constexpr std::string_view v13_characterisation = R"sql(
+CREATE TABLE study_characterise_points (
+  study_id        INTEGER NOT NULL,
+  point           INTEGER NOT NULL,
+  curve           INTEGER NOT NULL CHECK (curve >= 1),  -- 1, 2, ...: one model and frequency
+  model           TEXT NOT NULL CHECK (model IN ('soft', 'hard')),
+  empty           INTEGER NOT NULL CHECK (empty IN (0, 1)),  -- the container without particles
+  amplitude_m     REAL NOT NULL,  -- A of the container's motion z = A sin(2 pi f t)
+  gamma_given     REAL,           -- Gamma as the study file gave it; NULL: it gave A
+  frequency_hz    REAL NOT NULL,
+  step            INTEGER NOT NULL CHECK (step >= 1),  -- along the amplitude axis, ascending
+  previous_point  INTEGER,  -- the point whose final state this one starts from; NULL: the settled bed
+  PRIMARY KEY (study_id, point),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+
+CREATE TABLE study_characterise_metrics (
+  study_id                         INTEGER NOT NULL,
+  point                            INTEGER NOT NULL,
+  run_id                           INTEGER NOT NULL UNIQUE REFERENCES runs (run_id) ON DELETE CASCADE,
+  settled                          INTEGER NOT NULL CHECK (settled IN (0, 1)),
+  cycles_to_steady                 INTEGER NOT NULL,  -- cycles before the measured ones
+  cycles_run                       INTEGER NOT NULL,
+  measured_cycles                  INTEGER NOT NULL,
+  amplitude_m                      REAL NOT NULL,  -- the container's first harmonic, as measured
+  gamma                            REAL NOT NULL,  -- A w^2 / |g| (0 without gravity)
+  apparent_mass_kg                 REAL NOT NULL,  -- F_p,1 = -m_app z'' - c_eq z'
+  apparent_mass_spread_kg          REAL NOT NULL,  -- standard deviation of the measured cycles' own values
+  equivalent_damping_N_s_m         REAL NOT NULL,
+  equivalent_damping_spread_N_s_m  REAL NOT NULL,
+  impact_J_per_cycle               REAL NOT NULL,
+  friction_J_per_cycle             REAL NOT NULL,
+  loss_factor                      REAL NOT NULL,  -- D_cycle / (2 pi 1/2 m_p (w A)^2); 0 without particles
+  floor_contact_fraction           REAL NOT NULL,  -- of 64 instants a measured cycle, a sphere touching the floor
+  lid_contact_fraction             REAL NOT NULL,  -- and the lid
+  particle_mass_kg                 REAL NOT NULL,
+  gravity_m_s2                     REAL NOT NULL,  -- |g|
+  free_height_m                    REAL NOT NULL,  -- L: the cavity's height above the settled bed's top
+  wall_time_s                      REAL NOT NULL,
+  PRIMARY KEY (study_id, point),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+
+CREATE VIEW study_characterisation AS
+SELECT p.study_id, p.point, p.status, c.curve, c.model, c.empty, c.amplitude_m, c.gamma_given, c.frequency_hz,
+       c.step, c.previous_point, m.run_id, m.settled, m.cycles_to_steady, m.cycles_run, m.measured_cycles,
+       m.amplitude_m AS measured_amplitude_m, m.gamma, m.amplitude_m / nullif(m.free_height_m, 0) AS amplitude_ratio,
+       m.apparent_mass_kg, m.apparent_mass_spread_kg,
+       m.apparent_mass_kg / nullif(m.particle_mass_kg, 0) AS apparent_mass_ratio,
+       m.equivalent_damping_N_s_m, m.equivalent_damping_spread_N_s_m,
+       m.equivalent_damping_N_s_m / nullif(m.particle_mass_kg * 6.283185307179586 * c.frequency_hz, 0) AS damping_ratio,  -- c_eq / (m_p 2 pi f)
+       m.loss_factor, m.impact_J_per_cycle, m.friction_J_per_cycle,
+       m.impact_J_per_cycle + m.friction_J_per_cycle AS dissipated_J_per_cycle,
+       m.floor_contact_fraction, m.lid_contact_fraction, m.particle_mass_kg, m.gravity_m_s2, m.free_height_m,
+       m.wall_time_s
+FROM study_points p JOIN study_characterise_points c ON c.study_id = p.study_id AND c.point = p.point
+LEFT JOIN study_characterise_metrics m ON m.study_id = p.study_id AND m.point = p.point;
+)sql";
+
+constexpr std::array<std::string_view, 13> all{
+    v1_runs_samples_cycles,  v2_run_statistics,   v3_initial_states,   v4_comparisons, v5_solid_fraction,
+    v6_run_ids_never_reused, v7_run_snapshots,    v8_studies,          v9_study_jobs,  v10_run_checkpoints,
+    v11_frf_studies,         v12_engine_counters, v13_characterisation};
 
 }  // namespace
 

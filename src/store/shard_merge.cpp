@@ -32,9 +32,16 @@ constexpr std::array<std::string_view, 16> merged{"initial_states",
                                                   "study_point_metrics",
                                                   "study_points",
                                                   "study_tasks"};
-// The frequency-response tables stay empty in shards: `pdamp study submit` refuses [frf] studies.
-constexpr std::array<std::string_view, 7> unmerged{"studies",           "study_point_values", "study_jobs",
-                                                   "sqlite_sequence",   "study_frf_points",   "study_frf_metrics",
+// The frequency-response and characterisation tables stay empty in shards: `pdamp study
+// submit` refuses [frf] and [characterise] studies.
+constexpr std::array<std::string_view, 9> unmerged{"studies",
+                                                   "study_point_values",
+                                                   "study_jobs",
+                                                   "sqlite_sequence",
+                                                   "study_frf_points",
+                                                   "study_frf_metrics",
+                                                   "study_characterise_points",
+                                                   "study_characterise_metrics",
                                                    "study_point_states"};
 
 /// A shard's ids and their new ids in the store.

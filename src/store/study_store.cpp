@@ -147,10 +147,21 @@ void StudyStore::insert_points(std::int64_t study_id, const std::vector<NewStudy
                         "level, frequency_hz, step, previous_point) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   sqlite::Statement value(
       db(), "INSERT INTO study_point_values (study_id, point, key, value, number) VALUES (?, ?, ?, ?, ?)");
+  sqlite::Statement characterise(
+      db(),
+      "INSERT INTO study_characterise_points (study_id, point, curve, model, empty, amplitude_m, gamma_given, "
+      "frequency_hz, step, previous_point) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   for (const auto& p : points) {
     point.bind(1, study_id).bind(2, p.point).bind(3, p.section).run();
     for (const auto& [key, text] : p.values) {
       value.bind(1, study_id).bind(2, p.point).bind(3, key).bind(4, text).bind(5, single_number(text)).run();
+    }
+    if (const auto& c = p.characterise) {
+      characterise.bind(1, study_id).bind(2, p.point).bind(3, c->curve).bind(4, c->model);
+      characterise.bind(5, static_cast<std::int64_t>(c->empty)).bind(6, c->amplitude_m).bind(7, c->gamma_given);
+      characterise.bind(8, c->frequency_hz).bind(9, c->step);
+      characterise.bind(10, c->previous_point > 0 ? std::optional<std::int64_t>(c->previous_point) : std::nullopt);
+      characterise.run();
     }
     if (!p.frf) continue;
     const FrfPointRow& f = *p.frf;
@@ -251,7 +262,8 @@ std::optional<int> StudyStore::claim_point(std::int64_t study_id, int point, con
     const int attempt = static_cast<int>(claim.column_int(0));
     claim.reset();
     // A redone point's earlier metrics and final state belong to runs of an earlier attempt.
-    for (const char* table : {"study_point_metrics", "study_frf_metrics", "study_point_states"}) {
+    for (const char* table :
+         {"study_point_metrics", "study_frf_metrics", "study_characterise_metrics", "study_point_states"}) {
       sqlite::Statement old(db(), std::string("DELETE FROM ") + table + " WHERE study_id = ? AND point = ?");
       old.bind(1, study_id).bind(2, point).run();
     }
@@ -311,12 +323,29 @@ void StudyStore::complete_point(std::int64_t study_id, int point, int attempt, c
   });
 }
 
+std::int64_t StudyStore::store_end_and_complete(std::int64_t study_id, int point, int attempt, const std::string& label,
+                                                const FrfEndState& end, const Particles& end_spheres, double kinetic_J,
+                                                double wall_time_s) {
+  const std::int64_t state_id = insert_initial_state(db(), label, end_spheres, end.t_s, kinetic_J, wall_time_s);
+  sqlite::Statement state(db(),
+                          "INSERT INTO study_point_states (study_id, point, run_id, state_id, t_s, host_z_m, "
+                          "host_v_m_s) VALUES (?, ?, ?, ?, ?, ?, ?)");
+  state.bind(1, study_id).bind(2, point).bind(3, end.run_id).bind(4, state_id).bind(5, end.t_s);
+  state.bind(6, end.host.z_m).bind(7, end.host.v_m_s).run();
+  sqlite::Statement done(db(), with_now("UPDATE study_points SET status = 'completed', message = '', "
+                                        "lease_host = NULL, lease_pid = NULL, lease_start = NULL, ended_at = ",
+                                        " WHERE study_id = ? AND point = ? AND attempt = ? AND status = 'running'"));
+  done.bind(1, study_id).bind(2, point).bind(3, attempt).run();
+  if (db().changes() != 1) {
+    throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) + " attempt " +
+                         std::to_string(attempt) + " is no longer running here; its results are not counted");
+  }
+  return state_id;
+}
+
 std::int64_t StudyStore::complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& r,
                                             const Particles& end_spheres, double kinetic_J) {
   return sqlite::write_transaction(db(), [&] {
-    const std::int64_t state_id =
-        insert_initial_state(db(), "frequency-response point end: run " + std::to_string(r.run_id), end_spheres,
-                             r.end.t_s, kinetic_J, r.wall_time_s);
     const ResponseMetrics& m = r.metrics;
     sqlite::Statement metrics(
         db(),
@@ -342,27 +371,54 @@ std::int64_t StudyStore::complete_frf_point(std::int64_t study_id, int point, in
                              r.wall_time_s};
     for (int k = 0; k < 13; ++k) metrics.bind(8 + k, values[k]);
     metrics.run();
-    sqlite::Statement state(db(),
-                            "INSERT INTO study_point_states (study_id, point, run_id, state_id, t_s, host_z_m, "
-                            "host_v_m_s) VALUES (?, ?, ?, ?, ?, ?, ?)");
-    state.bind(1, study_id).bind(2, point).bind(3, r.run_id).bind(4, state_id).bind(5, r.end.t_s);
-    state.bind(6, r.end.host.z_m).bind(7, r.end.host.v_m_s).run();
-    sqlite::Statement done(db(), with_now("UPDATE study_points SET status = 'completed', message = '', "
-                                          "lease_host = NULL, lease_pid = NULL, lease_start = NULL, ended_at = ",
-                                          " WHERE study_id = ? AND point = ? AND attempt = ? AND status = 'running'"));
-    done.bind(1, study_id).bind(2, point).bind(3, attempt).run();
-    if (db().changes() != 1) {
-      throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) + " attempt " +
-                           std::to_string(attempt) + " is no longer running here; its results are not counted");
-    }
-    return state_id;
+    return store_end_and_complete(study_id, point, attempt,
+                                  "frequency-response point end: run " + std::to_string(r.run_id), r.end, end_spheres,
+                                  kinetic_J, r.wall_time_s);
+  });
+}
+
+std::int64_t StudyStore::complete_characterise_point(std::int64_t study_id, int point, int attempt,
+                                                     const CharacterisePointResult& r, const Particles& end_spheres,
+                                                     double kinetic_J) {
+  return sqlite::write_transaction(db(), [&] {
+    const CharacterisationMetrics& m = r.metrics;
+    sqlite::Statement metrics(
+        db(),
+        "INSERT INTO study_characterise_metrics (study_id, point, run_id, settled, cycles_to_steady, cycles_run, "
+        "measured_cycles, amplitude_m, gamma, apparent_mass_kg, apparent_mass_spread_kg, equivalent_damping_N_s_m, "
+        "equivalent_damping_spread_N_s_m, impact_J_per_cycle, friction_J_per_cycle, loss_factor, "
+        "floor_contact_fraction, lid_contact_fraction, particle_mass_kg, gravity_m_s2, free_height_m, wall_time_s) "
+        "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    metrics.bind(1, study_id).bind(2, point).bind(3, r.run_id).bind(4, static_cast<std::int64_t>(m.settled));
+    metrics.bind(5, m.cycles_to_steady).bind(6, r.cycles_run).bind(7, m.measured_cycles);
+    const double values[] = {m.amplitude_m,
+                             m.gamma,
+                             m.apparent_mass_kg,
+                             m.apparent_mass_spread_kg,
+                             m.equivalent_damping_N_s_m,
+                             m.equivalent_damping_spread_N_s_m,
+                             m.impact_J_per_cycle,
+                             m.friction_J_per_cycle,
+                             m.loss_factor,
+                             m.floor_contact_fraction,
+                             m.lid_contact_fraction,
+                             r.particle_mass_kg,
+                             r.gravity_m_s2,
+                             r.free_height_m,
+                             r.wall_time_s};
+    for (int k = 0; k < 15; ++k) metrics.bind(8 + k, values[k]);
+    metrics.run();
+    return store_end_and_complete(study_id, point, attempt,
+                                  "characterisation point end: run " + std::to_string(r.run_id), r.end, end_spheres,
+                                  kinetic_J, r.wall_time_s);
   });
 }
 
 std::map<int, int> StudyStore::previous_points(std::int64_t study_id) {
   sqlite::Statement q(db(),
-                      "SELECT point, previous_point FROM study_frf_points WHERE study_id = ? AND previous_point "
-                      "IS NOT NULL");
+                      "SELECT point, previous_point FROM study_frf_points WHERE study_id = ?1 AND previous_point "
+                      "IS NOT NULL UNION ALL SELECT point, previous_point FROM study_characterise_points "
+                      "WHERE study_id = ?1 AND previous_point IS NOT NULL");
   q.bind(1, study_id);
   std::map<int, int> previous;
   while (q.step()) previous[static_cast<int>(q.column_int(0))] = static_cast<int>(q.column_int(1));
@@ -423,6 +479,59 @@ std::vector<FrfPointRecord> StudyStore::frf_points(std::int64_t study_id) {
                           &m.particle_mass_kg,
                           &m.wall_time_s};
       for (int k = 0; k < 13; ++k) *values[k] = q.column_double(16 + k);
+      r.result = m;
+    }
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
+
+std::vector<CharacterisePointRecord> StudyStore::characterise_points(std::int64_t study_id) {
+  sqlite::Statement q(db(),
+                      "SELECT point, status, curve, model, empty, amplitude_m, gamma_given, frequency_hz, step, "
+                      "coalesce(previous_point, 0), run_id, settled, cycles_to_steady, cycles_run, measured_cycles, "
+                      "gamma, apparent_mass_kg, apparent_mass_spread_kg, equivalent_damping_N_s_m, "
+                      "equivalent_damping_spread_N_s_m, impact_J_per_cycle, friction_J_per_cycle, loss_factor, "
+                      "floor_contact_fraction, lid_contact_fraction, particle_mass_kg, gravity_m_s2, free_height_m, "
+                      "wall_time_s, measured_amplitude_m FROM study_characterisation WHERE study_id = ? "
+                      "ORDER BY point");
+  q.bind(1, study_id);
+  std::vector<CharacterisePointRecord> rows;
+  while (q.step()) {
+    CharacterisePointRecord r;
+    r.point = static_cast<int>(q.column_int(0));
+    r.status = q.column_text(1);
+    r.place = {static_cast<int>(q.column_int(2)),
+               q.column_text(3),
+               q.column_int(4) != 0,
+               q.column_double(5),
+               q.column_optional_double(6),
+               q.column_double(7),
+               static_cast<int>(q.column_int(8)),
+               static_cast<int>(q.column_int(9))};
+    if (!q.is_null(10)) {
+      CharacterisePointResult m;
+      m.run_id = q.column_int(10);
+      m.metrics.settled = q.column_int(11) != 0;
+      m.metrics.cycles_to_steady = static_cast<int>(q.column_int(12));
+      m.cycles_run = static_cast<int>(q.column_int(13));
+      m.metrics.measured_cycles = static_cast<int>(q.column_int(14));
+      double* values[] = {&m.metrics.gamma,
+                          &m.metrics.apparent_mass_kg,
+                          &m.metrics.apparent_mass_spread_kg,
+                          &m.metrics.equivalent_damping_N_s_m,
+                          &m.metrics.equivalent_damping_spread_N_s_m,
+                          &m.metrics.impact_J_per_cycle,
+                          &m.metrics.friction_J_per_cycle,
+                          &m.metrics.loss_factor,
+                          &m.metrics.floor_contact_fraction,
+                          &m.metrics.lid_contact_fraction,
+                          &m.particle_mass_kg,
+                          &m.gravity_m_s2,
+                          &m.free_height_m,
+                          &m.wall_time_s,
+                          &m.metrics.amplitude_m};
+      for (int k = 0; k < 15; ++k) *values[k] = q.column_double(15 + k);
       r.result = m;
     }
     rows.push_back(std::move(r));

@@ -1,9 +1,10 @@
-/// `[frf]` sections of study files (study_file.hpp): their keys, checked one by one.
+/// `[frf]` and `[characterise]` sections of study files (study_file.hpp): their keys, checked one by one.
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <map>
 #include <set>
+#include <span>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/study/study_file.hpp"
@@ -48,67 +49,61 @@ std::optional<double> finite_number(const std::string& text) {
   return x;
 }
 
-class FrfParser {
- public:
-  explicit FrfParser(const ini::Section& header) : header_(header) { frf_.section = header.name; }
+/// What [frf] and [characterise] sections share: the line bookkeeping, the frequencies,
+/// start, models, steady-state and scenario keys.
+class SteadySectionParser {
+ protected:
+  SteadySectionParser(const ini::Section& header, std::span<const std::string_view> keys_set_here,
+                      std::string_view valid_keys)
+      : header_(header), keys_set_here_(keys_set_here), valid_keys_(valid_keys) {}
 
-  void add(const ini::Entry& entry) {
-    where_ = entry.where + ": [" + frf_.section + "] " + entry.key;
+  /// Starts a line: its place for messages, and a key given twice refused.
+  void begin(const ini::Entry& entry) {
+    where_ = entry.where + ": [" + header_.name + "] " + entry.key;
     if (const auto [it, fresh] = lines_.emplace(entry.key, entry.line); !fresh) {
       fail("is given twice (first on line " + std::to_string(it->second) + ")");
     }
+  }
+
+  /// The keys both kinds have; false if `entry` is none of them.
+  bool common_key(const ini::Entry& entry, std::vector<std::string>& frequencies, FrfStart& start,
+                  std::optional<StudyModels>& models, SteadyStateCriterion& criterion) {
     const std::string& v = entry.value;
-    if (entry.key == "mode") {
-      if (v == "force") {
-        frf_.mode = ExcitationMode::force;
-      } else if (v == "base") {
-        frf_.mode = ExcitationMode::base_motion;
-      } else {
-        fail("= '" + ini::printable(v) +
-             "': must be force (F0 sin wt on the host) or base (base motion Y sin wt); free decay has no "
-             "excitation frequency and prescribed motion fixes the host, so neither has a frequency response");
-      }
-    } else if (entry.key == "levels") {
-      frf_.levels = positive_values(v, "each level (F0 in N under a force, Y in m under base motion) must be > 0");
-    } else if (entry.key == "frequencies") {
-      frf_.frequencies = positive_values(v, "each frequency (Hz) must be > 0");
-      std::stable_sort(
-          frf_.frequencies.begin(), frf_.frequencies.end(),
-          [](const std::string& a, const std::string& b) { return *finite_number(a) < *finite_number(b); });
-    } else if (entry.key == "direction") {
-      frf_.direction = choice(direction_names, v, "up, down or both");
+    if (entry.key == "frequencies") {
+      frequencies = ascending(positive_values(v, "each frequency (Hz) must be > 0"));
     } else if (entry.key == "start") {
-      frf_.start = choice(start_names, v,
-                          "continue (each point from the previous point's final state) or bed (every point from "
-                          "the settled bed)");
-    } else if (entry.key == "host_alone") {
-      if (v != "true" && v != "false") fail("= '" + ini::printable(v) + "': must be true or false");
-      frf_.host_alone = v == "true";
+      start = choice(start_names, v,
+                     "continue (each point from the previous point's final state) or bed (every point from the "
+                     "settled bed)");
     } else if (entry.key == "models") {
       if (v != "soft" && v != "hard" && v != "both") fail("= '" + ini::printable(v) + "': must be soft, hard or both");
-      frf_.models = v == "soft" ? StudyModels::soft : v == "hard" ? StudyModels::hard : StudyModels::both;
-    } else if (!criterion_key(entry.key, v)) {
-      scenario_key(entry.key, v);
+      models = v == "soft" ? StudyModels::soft : v == "hard" ? StudyModels::hard : StudyModels::both;
+    } else {
+      return criterion_key(entry.key, v, criterion);
+    }
+    return true;
+  }
+
+  bool flag(const std::string& text) const {
+    if (text != "true" && text != "false") fail("= '" + ini::printable(text) + "': must be true or false");
+    return text == "true";
+  }
+
+  void require(std::initializer_list<const char*> keys, const std::string& what) const {
+    for (const char* key : keys) {
+      if (!lines_.contains(key))
+        throw InputError(header_.where + ": [" + header_.name + "] needs " + key + " (" + what + ")");
     }
   }
 
-  FrfSection build() const {
-    for (const char* key : {"mode", "levels", "frequencies"}) {
-      if (!lines_.contains(key)) {
-        throw InputError(header_.where + ": [" + frf_.section + "] needs " + key +
-                         " (mode = force or base; levels = F0 in N or Y in m; frequencies in Hz)");
-      }
-    }
-    const SteadyStateCriterion& c = frf_.criterion;
+  void check_criterion(const SteadyStateCriterion& c) const {
     if (c.min_cycles > c.max_cycles || c.consecutive_cycles > c.max_cycles) {
-      throw InputError(header_.where + ": [" + frf_.section + "] max_cycles = " + std::to_string(c.max_cycles) +
+      throw InputError(header_.where + ": [" + header_.name + "] max_cycles = " + std::to_string(c.max_cycles) +
                        " is below min_cycles = " + std::to_string(c.min_cycles) + " or consecutive_cycles = " +
                        std::to_string(c.consecutive_cycles) + ": the cap must leave room to settle");
     }
-    return frf_;
   }
 
- private:
   [[noreturn]] void fail(const std::string& why) const { throw InputError(where_ + " " + why); }
 
   template <typename Value, std::size_t N>
@@ -131,9 +126,37 @@ class FrfParser {
     return values;
   }
 
+  static std::vector<std::string> ascending(std::vector<std::string> values) {
+    std::stable_sort(values.begin(), values.end(),
+                     [](const std::string& a, const std::string& b) { return *finite_number(a) < *finite_number(b); });
+    return values;
+  }
+
+  /// A scenario key set on every point, with one value.
+  void scenario_key(const std::string& key, const std::string& value,
+                    std::vector<std::pair<std::string, std::string>>& settings) const {
+    if (key.find('.') == std::string::npos) {
+      fail("is not an [" + kind() + "] key (valid: " + std::string(valid_keys_) + ")");
+    }
+    if (std::find(keys_set_here_.begin(), keys_set_here_.end(), key) != keys_set_here_.end()) {
+      fail("is set by [" + kind() + "] on every point (from its grid, and the steady-state keys for the run's length)");
+    }
+    if (const auto why = unsettable_key(key)) fail("is refused: " + *why);
+    if (value.find(',') != std::string::npos) {
+      fail("= " + ini::printable(value) + ": an [" + kind() + "] section sets a scenario key to one value; a grid of " +
+           (kind() == "frf" ? "frequency responses" : "characterisations") +
+           " is not supported (make one study per value)");
+    }
+    settings.emplace_back(key, value);
+  }
+
+  std::string kind() const { return header_.name.substr(0, header_.name.find('.')); }
+
+  ini::Section header_;
+
+ private:
   /// A steady-state key (SteadyStateCriterion, whose initializers are the defaults).
-  bool criterion_key(const std::string& key, const std::string& text) {
-    SteadyStateCriterion& c = frf_.criterion;
+  bool criterion_key(const std::string& key, const std::string& text, SteadyStateCriterion& c) const {
     const std::map<std::string, int*> counts{{"consecutive_cycles", &c.consecutive_cycles},
                                              {"min_cycles", &c.min_cycles},
                                              {"max_cycles", &c.max_cycles},
@@ -160,26 +183,111 @@ class FrfParser {
     return false;
   }
 
-  void scenario_key(const std::string& key, const std::string& value) {
-    if (key.find('.') == std::string::npos) fail("is not an [frf] key (valid: " + std::string(frf_keys) + ")");
-    if (std::find(keys_set_by_frf.begin(), keys_set_by_frf.end(), key) != keys_set_by_frf.end()) {
-      fail(
-          "is set by [frf] on every point (mode, levels, frequencies, and the steady-state keys for the run's "
-          "length)");
-    }
-    if (const auto why = unsettable_key(key)) fail("is refused: " + *why);
-    if (value.find(',') != std::string::npos) {
-      fail("= " + ini::printable(value) +
-           ": an [frf] section sets a scenario key to one value; a grid of frequency responses is not supported "
-           "(make one study per value)");
-    }
-    frf_.settings.emplace_back(key, value);
-  }
-
-  ini::Section header_;
-  FrfSection frf_;
+  std::span<const std::string_view> keys_set_here_;
+  std::string_view valid_keys_;
   std::string where_;
   std::map<std::string, int> lines_;
+};
+
+class FrfParser : SteadySectionParser {
+ public:
+  explicit FrfParser(const ini::Section& header) : SteadySectionParser(header, keys_set_by_frf, frf_keys) {
+    frf_.section = header.name;
+  }
+
+  void add(const ini::Entry& entry) {
+    begin(entry);
+    const std::string& v = entry.value;
+    if (entry.key == "mode") {
+      if (v == "force") {
+        frf_.mode = ExcitationMode::force;
+      } else if (v == "base") {
+        frf_.mode = ExcitationMode::base_motion;
+      } else {
+        fail("= '" + ini::printable(v) +
+             "': must be force (F0 sin wt on the host) or base (base motion Y sin wt); free decay has no "
+             "excitation frequency and prescribed motion fixes the host, so neither has a frequency response");
+      }
+    } else if (entry.key == "levels") {
+      frf_.levels = positive_values(v, "each level (F0 in N under a force, Y in m under base motion) must be > 0");
+    } else if (entry.key == "direction") {
+      frf_.direction = choice(direction_names, v, "up, down or both");
+    } else if (entry.key == "host_alone") {
+      frf_.host_alone = flag(v);
+    } else if (!common_key(entry, frf_.frequencies, frf_.start, frf_.models, frf_.criterion)) {
+      scenario_key(entry.key, v, frf_.settings);
+    }
+  }
+
+  FrfSection build() const {
+    require({"mode", "levels", "frequencies"}, "mode = force or base; levels = F0 in N or Y in m; frequencies in Hz");
+    check_criterion(frf_.criterion);
+    return frf_;
+  }
+
+ private:
+  FrfSection frf_;
+};
+
+/// Keys [characterise] sets itself on every point (and particles.count = 0 with empty = true).
+constexpr std::array<std::string_view, 6> keys_set_by_characterise{"excitation.mode",        "excitation.force_N",
+                                                                   "excitation.amplitude_m", "excitation.frequency_hz",
+                                                                   "run.duration_s",         "run.sample_interval_s"};
+
+constexpr std::string_view characterise_keys =
+    "amplitudes or gammas, frequencies, start, empty, models, consecutive_cycles, amplitude_tolerance, "
+    "phase_tolerance_rad, min_cycles, max_cycles, measured_cycles, or a scenario key section.key";
+
+class CharacteriseParser : SteadySectionParser {
+ public:
+  explicit CharacteriseParser(const ini::Section& header)
+      : SteadySectionParser(header, keys_set_by_characterise, characterise_keys) {
+    c_.section = header.name;
+  }
+
+  void add(const ini::Entry& entry) {
+    begin(entry);
+    const std::string& v = entry.value;
+    if (entry.key == "amplitudes" || entry.key == "gammas") {
+      if (axis_given_) fail("and " + axis_key() + " are both given: the amplitude axis is one of them");
+      axis_given_ = true;
+      c_.axis = entry.key == "gammas" ? AmplitudeAxis::gamma : AmplitudeAxis::amplitude;
+      c_.amplitudes = ascending(
+          positive_values(v, c_.axis == AmplitudeAxis::gamma
+                                 ? "each Gamma = A (2 pi f)^2 / g must be > 0"
+                                 : "each amplitude (m, of the container's motion A sin 2 pi f t) must be > 0"));
+      at_least_two(c_.amplitudes, "amplitude");
+    } else if (entry.key == "empty") {
+      c_.empty = flag(v);
+    } else if (common_key(entry, c_.frequencies, c_.start, c_.models, c_.criterion)) {
+      if (entry.key == "frequencies") at_least_two(c_.frequencies, "frequency");
+    } else {
+      scenario_key(entry.key, v, c_.settings);
+    }
+  }
+
+  CharacteriseSection build() const {
+    if (!axis_given_) {
+      throw InputError(header_.where + ": [" + header_.name +
+                       "] needs amplitudes (m) or gammas (Gamma = A (2 pi f)^2 / g): the amplitude axis");
+    }
+    require({"frequencies"}, "in Hz, two or more");
+    check_criterion(c_.criterion);
+    return c_;
+  }
+
+ private:
+  std::string axis_key() const { return c_.axis == AmplitudeAxis::gamma ? "gammas" : "amplitudes"; }
+
+  void at_least_two(const std::vector<std::string>& values, const std::string& what) const {
+    if (values.size() < 2) {
+      fail("has " + std::to_string(values.size()) + " value: a characterisation needs two or more on each axis (a " +
+           what + " axis of one value cannot be interpolated)");
+    }
+  }
+
+  CharacteriseSection c_;
+  bool axis_given_ = false;
 };
 
 }  // namespace
@@ -200,6 +308,12 @@ std::string_view to_string(FrfStart start) {
 
 FrfSection parse_frf_section(const ini::Section& header, const std::vector<ini::Entry>& entries) {
   FrfParser parser(header);
+  for (const auto& entry : entries) parser.add(entry);
+  return parser.build();
+}
+
+CharacteriseSection parse_characterise_section(const ini::Section& header, const std::vector<ini::Entry>& entries) {
+  CharacteriseParser parser(header);
   for (const auto& entry : entries) parser.add(entry);
   return parser.build();
 }

@@ -1,11 +1,13 @@
 #include "pdamp/study/point_runner.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <optional>
 #include <vector>
 
 #include "pdamp/compare/comparison.hpp"
 #include "pdamp/errors.hpp"
+#include "pdamp/model/host.hpp"
 #include "pdamp/sim/frf_point.hpp"
 #include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/sim/stored_run.hpp"
@@ -30,8 +32,9 @@ std::string not_claimed(StudyStore& studies, std::int64_t study_id, int point) {
 struct PointRuns {
   std::vector<StoredRun> runs;
   std::optional<std::int64_t> comparison_id;
-  std::optional<FrfPointResult> frf;  ///< a completed frequency-response point's
-  Particles frf_end;                  ///< and its spheres at the end
+  std::optional<FrfPointResult> frf;                    ///< a completed frequency-response point's
+  std::optional<CharacterisePointResult> characterise;  ///< a completed characterisation point's
+  Particles end_spheres;                                ///< and its spheres at the end
 };
 
 double kinetic_energy_J(const Particles& p) {
@@ -54,6 +57,7 @@ class PointExecution {
 
   PointRuns run() {
     const StudyPoint& point = study_->points.at(static_cast<std::size_t>(point_ - 1));
+    if (point.characterise) return run_characterise(point);
     return point.frf ? run_frf(point) : run_sweep(point);
   }
 
@@ -65,14 +69,7 @@ class PointExecution {
     if (study_->file.models != StudyModels::soft) plans.push_back(plan_run(Model::hard, scenario, control_->snapshots));
     // Settled (or taken from the store) when the first run needs it, after that run's row.
     std::optional<InitialBed> bed;
-    const BedSource bed_source = [&]() -> const InitialBed& {
-      if (!bed) {
-        report(0.0, "settling");
-        bed =
-            prepare_initial_bed(scenario, *store_, control_->stop, [this](double, double) { report(0.0, "settling"); });
-      }
-      return *bed;
-    };
+    const BedSource bed_source = [&]() -> const InitialBed& { return settled_bed(scenario, bed); };
     PointRuns result;
     for (std::size_t m = 0; m < plans.size(); ++m) {
       const std::string_view model = to_string(plans[m].engine.model);
@@ -94,19 +91,50 @@ class PointExecution {
     return result;
   }
 
+  /// The final state a point continues from (nothing: the settled bed).
+  std::optional<FrfEndState> start_state(int previous) {
+    if (previous == 0) return std::nullopt;
+    auto from = studies_.end_state(study_id_, previous);
+    if (!from) {
+      throw RuntimeFailure("point " + std::to_string(point_) + " continues from point " + std::to_string(previous) +
+                           ", which is not completed; run that point first");
+    }
+    return from;
+  }
+
+  /// The settled bed (settled now, or taken from the store).
+  const InitialBed& settled_bed(const Scenario& scenario, std::optional<InitialBed>& bed) {
+    if (!bed) {
+      report(0.0, "settling");
+      bed = prepare_initial_bed(scenario, *store_, control_->stop, [this](double, double) { report(0.0, "settling"); });
+    }
+    return *bed;
+  }
+
+  /// A point run cycle by cycle (`plan.body` set), from the previous point's final state
+  /// `from` or from the settled bed, into the store linked to the point.
+  StoredRun run_cycles(const Scenario& scenario, Model model, const RunPlan& plan,
+                       const std::optional<FrfEndState>& from) {
+    std::optional<InitialBed> bed;
+    const BedSource bed_source = [&]() -> const InitialBed& {
+      if (!bed && from)
+        bed = InitialBed{store_->load_initial_particles(from->state_id), from->state_id, true, from->t_s};
+      return settled_bed(scenario, bed);
+    };
+    const std::string_view name = to_string(model);
+    RunControl run_control;
+    run_control.stop = control_->stop;
+    run_control.progress = [&, duration = scenario.run.duration_s](double t) { report(t / duration, name); };
+    return run_and_store(*store_, plan, bed_source, run_control, control_->warn,
+                         [&](std::int64_t run_id) { studies_.link_run(study_id_, point_, attempt_, name, run_id); });
+  }
+
   /// A frequency-response point: from the previous point's final state (continuation) or
   /// from the settled bed, its model's run to steady state, and its own final state kept
   /// for the next point.
   PointRuns run_frf(const StudyPoint& point) {
     const FrfPoint& frf = *point.frf;
-    std::optional<FrfEndState> from;
-    if (frf.previous > 0) {
-      from = studies_.end_state(study_id_, frf.previous);
-      if (!from) {
-        throw RuntimeFailure("point " + std::to_string(point_) + " continues from point " +
-                             std::to_string(frf.previous) + ", which is not completed; run that point first");
-      }
-    }
+    const std::optional<FrfEndState> from = start_state(frf.previous);
     const Scenario scenario = point_scenario(*study_, point, from ? std::optional(from->host) : std::nullopt);
     RunPlan plan = plan_run(frf.model, scenario);
     FrfRun frf_run;
@@ -114,26 +142,8 @@ class PointExecution {
                                                                  RunRecorder& recorder, const RunControl& c) {
       return run_frf_simulation(engine, s, recorder, c, criterion, frf_run);
     };
-    std::optional<InitialBed> bed;
-    const BedSource bed_source = [&]() -> const InitialBed& {
-      if (bed) return *bed;
-      if (from) {
-        bed = InitialBed{store_->load_initial_particles(from->state_id), from->state_id, true, from->t_s};
-      } else {
-        report(0.0, "settling");
-        bed =
-            prepare_initial_bed(scenario, *store_, control_->stop, [this](double, double) { report(0.0, "settling"); });
-      }
-      return *bed;
-    };
-    const std::string_view model = to_string(frf.model);
-    RunControl run_control;
-    run_control.stop = control_->stop;
-    run_control.progress = [&, duration = scenario.run.duration_s](double t) { report(t / duration, model); };
     PointRuns result;
-    result.runs.push_back(
-        run_and_store(*store_, plan, bed_source, run_control, control_->warn,
-                      [&](std::int64_t run_id) { studies_.link_run(study_id_, point_, attempt_, model, run_id); }));
+    result.runs.push_back(run_cycles(scenario, frf.model, plan, from));
     const StoredRun& run = result.runs.back();
     if (run.outcome.status != RunStatus::completed) return result;
     const State& end = frf_run.final_state;
@@ -143,8 +153,49 @@ class PointExecution {
                                 end.particles.total_mass_kg(),
                                 run.outcome.wall_time_s,
                                 {run.run_id, 0, end.observation.t_s, end.observation.host}};
-    result.frf_end = end.particles;
+    result.end_spheres = end.particles;
     return result;
+  }
+
+  /// A characterisation point: the container's prescribed motion (time restarts at 0 on
+  /// the previous point's final spheres: the container is at z = 0 there, only its
+  /// velocity amplitude changes), its run to steady state, and its final state.
+  PointRuns run_characterise(const StudyPoint& point) {
+    const CharacterisePoint& c = *point.characterise;
+    const std::optional<FrfEndState> from = start_state(c.previous);
+    const Scenario scenario = point_scenario(*study_, point);
+    RunPlan plan = plan_run(c.model, scenario);
+    CharacterisationRun characterisation;
+    plan.body = [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s,
+                                                                 RunRecorder& recorder, const RunControl& rc) {
+      return run_characterisation_simulation(engine, s, recorder, rc, criterion, characterisation);
+    };
+    PointRuns result;
+    result.runs.push_back(run_cycles(scenario, c.model, plan, from));
+    const StoredRun& run = result.runs.back();
+    if (run.outcome.status != RunStatus::completed) return result;
+    std::optional<InitialBed> settled;
+    const double free_height_m = free_height(scenario, settled_bed(scenario, settled).particles);
+    const State& end = characterisation.final_state;
+    result.characterise = CharacterisePointResult{run.run_id,
+                                                  characterisation.point.metrics,
+                                                  characterisation.point.cycles_run,
+                                                  end.particles.total_mass_kg(),
+                                                  scenario.gravity_m_s2.norm(),
+                                                  free_height_m,
+                                                  run.outcome.wall_time_s,
+                                                  {run.run_id, 0, end.observation.t_s, end.observation.host}};
+    result.end_spheres = end.particles;
+    return result;
+  }
+
+  /// L: the cavity's height above the settled bed's top (the bed settled with the host at
+  /// its initial position); the whole height without particles.
+  static double free_height(const Scenario& scenario, const Particles& bed) {
+    const double floor_m = HostModel(scenario).initial_state().z_m;
+    double top_m = floor_m;
+    for (Eigen::Index i = 0; i < bed.size(); ++i) top_m = std::max(top_m, bed.position_m(2, i) + bed.radius_m[i]);
+    return scenario.cavity.height_m - (top_m - floor_m);
   }
 
   void report(double fraction, std::string_view phase) const {
@@ -172,7 +223,13 @@ PointResult finish(StudyStore& studies, std::int64_t study_id, int point, int at
     run_ids.push_back(run.run_id);
   }
   if (result.frf) {
-    studies.complete_frf_point(study_id, point, attempt, *result.frf, result.frf_end, kinetic_energy_J(result.frf_end));
+    studies.complete_frf_point(study_id, point, attempt, *result.frf, result.end_spheres,
+                               kinetic_energy_J(result.end_spheres));
+    return {PointStatus::completed, attempt, ""};
+  }
+  if (result.characterise) {
+    studies.complete_characterise_point(study_id, point, attempt, *result.characterise, result.end_spheres,
+                                        kinetic_energy_J(result.end_spheres));
     return {PointStatus::completed, attempt, ""};
   }
   studies.complete_point(study_id, point, attempt, run_ids, result.comparison_id);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <numbers>
 #include <set>
 #include <sstream>
 
@@ -64,6 +65,9 @@ std::size_t frf_points(const StudyFile& file) {
 
 std::size_t count_points(const StudyFile& file, bool force, const std::string& origin) {
   std::size_t total = frf_points(file);
+  for (const auto& c : file.characterisations) {
+    total += models_of(c.models.value_or(file.models)).size() * c.frequencies.size() * c.amplitudes.size();
+  }
   for (const auto& sweep : file.sweeps) total += sweep.points_up_to(max_points);
   if (total > max_points) {
     throw InputError(origin + ": the study has more than " + std::to_string(max_points) +
@@ -81,7 +85,7 @@ std::size_t count_points(const StudyFile& file, bool force, const std::string& o
 void expand(const Sweep& sweep, std::vector<StudyPoint>& points) {
   std::vector<std::size_t> index(sweep.axes.size(), 0);
   for (;;) {
-    StudyPoint p{static_cast<int>(points.size()) + 1, sweep.section, {}, std::nullopt};
+    StudyPoint p{static_cast<int>(points.size()) + 1, sweep.section, {}, std::nullopt, std::nullopt};
     for (std::size_t a = 0; a < sweep.axes.size(); ++a) {
       const auto& axis = sweep.axes[a];
       for (std::size_t k = 0; k < axis.keys.size(); ++k) p.values.emplace_back(axis.keys[k], axis.values[index[a]][k]);
@@ -94,6 +98,56 @@ void expand(const Sweep& sweep, std::vector<StudyPoint>& points) {
   }
 }
 
+std::string exact(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", x);
+  return text;
+}
+
+/// |g| of the base scenario with a characterisation's settings: what turns Γ into A.
+double characterisation_gravity_m_s2(const StudySource& source, const CharacteriseSection& c) {
+  ScenarioOverrides overrides;
+  for (const auto& [key, value] : c.settings) overrides.push_back(key + "=" + value);
+  const double g =
+      parse_scenario(source.scenario_text, "base", source.scenario_path.string(), overrides, "set").gravity_m_s2.norm();
+  if (g <= 0.0) {
+    throw InputError(source.study_path.string() + ": [" + c.section +
+                     "] gammas: Gamma = A (2 pi f)^2 / g needs gravity, and the scenario has |g| = 0; give "
+                     "amplitudes (m) instead");
+  }
+  return g;
+}
+
+void expand_characterisation(const Study& study, std::size_t section, std::vector<StudyPoint>& points) {
+  const CharacteriseSection& c = study.file.characterisations[section];
+  const bool from_gamma = c.axis == AmplitudeAxis::gamma;
+  const double g_m_s2 = from_gamma ? characterisation_gravity_m_s2(study.source, c) : 0.0;
+  for (const Model model : models_of(c.models.value_or(study.file.models))) {
+    for (const auto& frequency : c.frequencies) {
+      const int curve = points.empty() ? 1 : points.back().characterise->curve + 1;
+      const double omega_rad_s = 2.0 * std::numbers::pi * std::stod(frequency);
+      for (std::size_t i = 0; i < c.amplitudes.size(); ++i) {
+        CharacterisePoint place{section, curve, model, c.empty, c.amplitudes[i], "", frequency, static_cast<int>(i) + 1,
+                                0};
+        if (from_gamma) {
+          place.gamma = c.amplitudes[i];
+          place.amplitude_m = exact(std::stod(c.amplitudes[i]) * g_m_s2 / (omega_rad_s * omega_rad_s));
+        }
+        StudyPoint p{static_cast<int>(points.size()) + 1, c.section, c.settings, std::nullopt, place};
+        p.characterise->previous = c.start == FrfStart::continuation && i > 0 ? p.point - 1 : 0;
+        p.values.emplace_back("excitation.mode", "prescribed");
+        p.values.emplace_back("excitation.amplitude_m", place.amplitude_m);
+        p.values.emplace_back("excitation.frequency_hz", frequency);
+        if (c.empty) {
+          std::erase_if(p.values, [](const auto& v) { return v.first == "particles.count"; });
+          p.values.emplace_back("particles.count", "0");
+        }
+        points.push_back(std::move(p));
+      }
+    }
+  }
+}
+
 void expand(const StudyFile& file, std::size_t section, std::vector<StudyPoint>& points) {
   const FrfSection& frf = file.frfs[section];
   const bool base = frf.mode == ExcitationMode::base_motion;
@@ -102,7 +156,7 @@ void expand(const StudyFile& file, std::size_t section, std::vector<StudyPoint>&
     auto frequencies = frf.frequencies;
     if (curve.direction == FrfDirection::down) std::reverse(frequencies.begin(), frequencies.end());
     for (std::size_t i = 0; i < frequencies.size(); ++i) {
-      StudyPoint p{static_cast<int>(points.size()) + 1, frf.section, frf.settings, curve};
+      StudyPoint p{static_cast<int>(points.size()) + 1, frf.section, frf.settings, curve, std::nullopt};
       p.frf->frequency_hz = frequencies[i];
       p.frf->step = static_cast<int>(i) + 1;
       p.frf->previous = frf.start == FrfStart::continuation && i > 0 ? p.point - 1 : 0;
@@ -116,12 +170,6 @@ void expand(const StudyFile& file, std::size_t section, std::vector<StudyPoint>&
       points.push_back(std::move(p));
     }
   }
-}
-
-std::string exact(double x) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.17g", x);
-  return text;
 }
 
 /// Resolved `key = value` lines of a canonical scenario, keyed by "[section] key".
@@ -163,6 +211,12 @@ std::map<std::string, std::string> sweep_keys(const StudyFile& file) {
   return keys;
 }
 
+std::string describe_criterion(const SteadyStateCriterion& c) {
+  return std::to_string(c.consecutive_cycles) + " cycles within " + exact(c.amplitude_tolerance) + " and " +
+         exact(c.phase_tolerance_rad) + " rad, cycles " + std::to_string(c.min_cycles) + " to " +
+         std::to_string(c.max_cycles) + ", " + std::to_string(c.measured_cycles) + " measured";
+}
+
 /// Each [frf] section's settings, keyed by "[section] key".
 std::map<std::string, std::string> frf_keys(const StudyFile& file) {
   std::map<std::string, std::string> keys;
@@ -173,7 +227,6 @@ std::map<std::string, std::string> frf_keys(const StudyFile& file) {
   };
   for (const auto& f : file.frfs) {
     const std::string s = "[" + f.section + "] ";
-    const SteadyStateCriterion& c = f.criterion;
     keys[s + "mode"] = f.mode == ExcitationMode::force ? "force" : "base";
     keys[s + "levels"] = join(f.levels);
     keys[s + "frequencies"] = join(f.frequencies);
@@ -181,11 +234,29 @@ std::map<std::string, std::string> frf_keys(const StudyFile& file) {
     keys[s + "host_alone"] = f.host_alone ? "true" : "false";
     keys[s + "start"] = to_string(f.start);
     keys[s + "models"] = f.models ? to_string(*f.models) : "(the study's)";
-    keys[s + "steady state"] = std::to_string(c.consecutive_cycles) + " cycles within " + exact(c.amplitude_tolerance) +
-                               " and " + exact(c.phase_tolerance_rad) + " rad, cycles " + std::to_string(c.min_cycles) +
-                               " to " + std::to_string(c.max_cycles) + ", " + std::to_string(c.measured_cycles) +
-                               " measured";
+    keys[s + "steady state"] = describe_criterion(f.criterion);
     for (const auto& [key, value] : f.settings) keys[s + key] = value;
+  }
+  return keys;
+}
+
+/// Each [characterise] section's settings, keyed by "[section] key".
+std::map<std::string, std::string> characterise_keys(const StudyFile& file) {
+  std::map<std::string, std::string> keys;
+  auto join = [](const std::vector<std::string>& values) {
+    std::string text;
+    for (const auto& v : values) text += (text.empty() ? "" : ", ") + v;
+    return text;
+  };
+  for (const auto& c : file.characterisations) {
+    const std::string s = "[" + c.section + "] ";
+    keys[s + (c.axis == AmplitudeAxis::gamma ? "gammas" : "amplitudes")] = join(c.amplitudes);
+    keys[s + "frequencies"] = join(c.frequencies);
+    keys[s + "start"] = to_string(c.start);
+    keys[s + "empty"] = c.empty ? "true" : "false";
+    keys[s + "models"] = c.models ? to_string(*c.models) : "(the study's)";
+    keys[s + "steady state"] = describe_criterion(c.criterion);
+    for (const auto& [key, value] : c.settings) keys[s + key] = value;
   }
   return keys;
 }
@@ -237,15 +308,16 @@ Study make_study(StudySource source, bool force) {
   study.points.reserve(count_points(study.file, force, origin));
   for (const auto& sweep : study.file.sweeps) expand(sweep, study.points);
   for (std::size_t s = 0; s < study.file.frfs.size(); ++s) expand(study.file, s, study.points);
+  for (std::size_t s = 0; s < study.file.characterisations.size(); ++s) expand_characterisation(study, s, study.points);
   return study;
 }
 
 Scenario point_scenario(const Study& study, const StudyPoint& point, const std::optional<HostState>& host_start) {
   ScenarioOverrides overrides{"scenario.name=" + point_name(study, point.point)};
   for (const auto& [key, value] : point.values) overrides.push_back(key + "=" + value);
-  if (point.frf) {
+  if (point.frf || point.characterise) {
     const SteadyStateCriterion& c = point_criterion(study, point);
-    const double period_s = 1.0 / std::stod(point.frf->frequency_hz);
+    const double period_s = 1.0 / std::stod(point.frf ? point.frf->frequency_hz : point.characterise->frequency_hz);
     overrides.push_back("run.duration_s=" + exact((c.max_cycles + c.measured_cycles) * period_s));
     overrides.push_back("run.sample_interval_s=" + exact(period_s));
     if (host_start) {
@@ -258,19 +330,27 @@ Scenario point_scenario(const Study& study, const StudyPoint& point, const std::
 }
 
 const SteadyStateCriterion& point_criterion(const Study& study, const StudyPoint& point) {
+  if (point.characterise) return study.file.characterisations.at(point.characterise->section).criterion;
   if (!point.frf) throw RuntimeFailure("point " + std::to_string(point.point) + " is not a frequency-response point");
   return study.file.frfs.at(point.frf->section).criterion;
 }
 
-void refuse_frf_study(const Study& study, const std::string& command) {
-  if (study.file.frfs.empty()) return;
-  throw InputError(study.source.study_path.string() + ": [" + study.file.frfs.front().section + "]: " + command +
-                   " runs [sweep] studies only: the points of a frequency-response curve run in order, each from "
-                   "the previous point's final state; run it with 'pdamp study run' (--jobs runs curves side by "
-                   "side)");
+void refuse_curve_study(const Study& study, const std::string& command) {
+  if (study.file.frfs.empty() && study.file.characterisations.empty()) return;
+  const std::string& section =
+      study.file.frfs.empty() ? study.file.characterisations.front().section : study.file.frfs.front().section;
+  throw InputError(study.source.study_path.string() + ": [" + section + "]: " + command +
+                   " runs [sweep] studies only: the points of a frequency-response or characterisation curve run "
+                   "in order, each from the previous point's final state; run it with 'pdamp study run' (--jobs "
+                   "runs curves side by side)");
 }
 
 std::string describe_curve(const StudyPoint& point) {
+  if (const auto& c = point.characterise) {
+    return std::string(to_string(c->model)) + (c->empty ? " empty" : "") + " " + c->frequency_hz + " Hz, curve " +
+           std::to_string(c->curve) + ", step " + std::to_string(c->step) +
+           (c->previous > 0 ? " after point " + std::to_string(c->previous) : " from the bed");
+  }
   if (!point.frf) return "";
   const FrfPoint& f = *point.frf;
   return std::string(to_string(f.model)) + (f.host_alone ? " host alone" : "") + " " +
@@ -285,18 +365,20 @@ std::string describe_values(const StudyPoint& point) {
 }
 
 void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots) {
-  if (snapshots && !study.file.frfs.empty()) {
-    throw InputError(study.source.study_path.string() + ": [" + study.file.frfs.front().section +
-                     "]: --snapshots is for [sweep] studies only: a frequency-response point advances a whole "
-                     "excitation cycle at a time, with no observation grid to take snapshots on; run the study "
-                     "without --snapshots (or one point's scenario with 'pdamp run --snapshots')");
+  if (snapshots && study.file.sweeps.empty()) {
+    throw InputError(study.source.study_path.string() + ": [" + study.points.front().section +
+                     "]: --snapshots is for [sweep] studies only: a frequency-response or characterisation point "
+                     "advances a whole excitation cycle at a time, with no observation grid to take snapshots on; "
+                     "run the study without --snapshots (or one point's scenario with 'pdamp run --snapshots')");
   }
   const std::vector<Model> models = models_of(study.file.models);
   for (const auto& point : study.points) {
     try {
       const Scenario scenario = point_scenario(study, point);
-      for (const Model model : point.frf ? std::vector<Model>{point.frf->model} : models)
-        plan_run(model, scenario, snapshots);
+      const std::vector<Model> point_models = point.frf            ? std::vector<Model>{point.frf->model}
+                                              : point.characterise ? std::vector<Model>{point.characterise->model}
+                                                                   : models;
+      for (const Model model : point_models) plan_run(model, scenario, snapshots);
     } catch (const InputError& e) {
       throw InputError(study.source.study_path.string() + ": point " + std::to_string(point.point) + " of " +
                        std::to_string(study.points.size()) + " ([" + point.section + "] " + describe_values(point) +
@@ -311,6 +393,7 @@ std::vector<std::string> study_differences(const Study& stored, const Study& now
   differ(out, "[study] models", std::string(to_string(now.file.models)), std::string(to_string(stored.file.models)));
   map_differences(out, "", sweep_keys(now.file), sweep_keys(stored.file));
   map_differences(out, "", frf_keys(now.file), frf_keys(stored.file));
+  map_differences(out, "", characterise_keys(now.file), characterise_keys(stored.file));
   const auto base = [](const Study& s) {
     return canonical_lines(
         parse_scenario(s.source.scenario_text, "base", s.source.scenario_path.string()).canonical_text);

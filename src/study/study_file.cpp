@@ -236,6 +236,15 @@ bool is_section_of(const std::string& section, std::string_view kind) {
 }
 bool is_sweep_section(const std::string& section) { return is_section_of(section, "sweep"); }
 bool is_frf_section(const std::string& section) { return is_section_of(section, "frf"); }
+bool is_characterise_section(const std::string& section) { return is_section_of(section, "characterise"); }
+
+/// The kind of a study's section: sweep, frf or characterise (empty for [study]).
+std::string section_kind(const std::string& section) {
+  for (const char* kind : {"sweep", "frf", "characterise"}) {
+    if (is_section_of(section, kind)) return kind;
+  }
+  return "";
+}
 
 StudyModels parse_models(const ini::Entry& entry) {
   for (const auto& [value, name] : model_names) {
@@ -245,25 +254,27 @@ StudyModels parse_models(const ini::Entry& entry) {
                         "': must be soft, hard or both (both models from one settled bed, compared)");
 }
 
-/// The study file's sections: [study] and the sweeps or the frequency responses, each
-/// once, and nothing before them.
+/// The study file's sections: [study] and the sweeps, the frequency responses or the
+/// characterisations, each once, and nothing before them.
 void check_sections(const ini::Document& document) {
   std::map<std::string, int> seen;
-  const ini::Section* sweep = nullptr;
-  const ini::Section* frf = nullptr;
+  const ini::Section* first = nullptr;  // the first section of a kind
   for (const auto& section : document.sections) {
-    if (section.name != "study" && !is_sweep_section(section.name) && !is_frf_section(section.name)) {
+    const std::string kind = section_kind(section.name);
+    if (section.name != "study" && kind.empty()) {
       fail(section.where, "unknown section [" + ini::printable(section.name) +
-                              "]: a study file has [study] and one or more [sweep] or [sweep.NAME] sections, or "
-                              "one or more [frf] or [frf.NAME] sections (NAME of letters, digits, _ and -)");
+                              "]: a study file has [study] and one or more [sweep] or [sweep.NAME] sections, "
+                              "[frf] or [frf.NAME] sections, or [characterise] or [characterise.NAME] sections "
+                              "(NAME of letters, digits, _ and -)");
     }
-    if (is_sweep_section(section.name) && !sweep) sweep = &section;
-    if (is_frf_section(section.name) && !frf) frf = &section;
-    if (sweep && frf) {
-      fail(section.where, "[" + section.name + "]: a study has [sweep] or [frf] sections, not both ([" +
-                              (sweep == &section ? frf : sweep)->name +
-                              "] is there too); a grid of frequency responses is not supported: make one "
-                              "[frf] study per case");
+    if (!kind.empty() && !first) first = &section;
+    if (!kind.empty() && section_kind(first->name) != kind) {
+      fail(section.where, "[" + section.name +
+                              "]: a study has sections of one kind, [sweep], [frf] or "
+                              "[characterise] ([" +
+                              first->name +
+                              "] is there too); a grid of frequency responses or characterisations is not "
+                              "supported: make one study per case");
     }
     if (const auto [it, fresh] = seen.emplace(section.name, section.line); !fresh) {
       fail(section.where, "[" + section.name + "] appears twice (first on line " + std::to_string(it->second) + ")");
@@ -285,13 +296,17 @@ StudyFile parse_study_file(const std::string& text, const std::string& origin, c
   study.name = default_name;
   std::map<std::string, int> given;  // [study] keys and their lines
   std::map<std::string, SweepBuilder> builders;
-  std::map<std::string, std::vector<ini::Entry>> frf_entries;
+  std::map<std::string, std::vector<ini::Entry>> frf_entries, characterise_entries;
   for (const auto& section : document.sections) {
     if (is_sweep_section(section.name)) builders.emplace(section.name, SweepBuilder(section));
   }
   for (const auto& entry : document.entries) {
     if (is_frf_section(entry.section)) {
       frf_entries[entry.section].push_back(entry);
+      continue;
+    }
+    if (is_characterise_section(entry.section)) {
+      characterise_entries[entry.section].push_back(entry);
       continue;
     }
     if (entry.section != "study") {
@@ -323,11 +338,14 @@ StudyFile parse_study_file(const std::string& text, const std::string& origin, c
   for (const auto& section : document.sections) {
     if (is_sweep_section(section.name)) study.sweeps.push_back(builders.at(section.name).build());
     if (is_frf_section(section.name)) study.frfs.push_back(parse_frf_section(section, frf_entries[section.name]));
+    if (is_characterise_section(section.name)) {
+      study.characterisations.push_back(parse_characterise_section(section, characterise_entries[section.name]));
+    }
   }
-  if (study.sweeps.empty() && study.frfs.empty()) {
+  if (study.sweeps.empty() && study.frfs.empty() && study.characterisations.empty()) {
     throw InputError(origin +
-                     ": no [sweep] or [frf] section: a study varies at least one key, or runs frequency "
-                     "responses");
+                     ": no [sweep], [frf] or [characterise] section: a study varies at least one key, runs "
+                     "frequency responses or characterises a damper");
   }
   return study;
 }

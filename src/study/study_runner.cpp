@@ -314,6 +314,19 @@ std::optional<FrfPointRow> frf_row(const Study& study, const StudyPoint& p) {
                      f.previous};
 }
 
+std::optional<CharacterisePointRow> characterise_row(const StudyPoint& p) {
+  if (!p.characterise) return std::nullopt;
+  const CharacterisePoint& c = *p.characterise;
+  return CharacterisePointRow{c.curve,
+                              std::string(to_string(c.model)),
+                              c.empty,
+                              std::stod(c.amplitude_m),
+                              c.gamma.empty() ? std::nullopt : std::optional(std::stod(c.gamma)),
+                              std::stod(c.frequency_hz),
+                              c.step,
+                              c.previous};
+}
+
 std::string join_lines(const std::vector<std::string>& lines) {
   std::string text;
   for (const auto& l : lines) text += "\n  " + l;
@@ -335,7 +348,9 @@ std::int64_t find_or_create_study(RunStore& store, const Study& study) {
       return record->study_id;
     }
     std::vector<NewStudyPoint> points;
-    for (const auto& p : study.points) points.push_back({p.point, p.section, p.values, frf_row(study, p)});
+    for (const auto& p : study.points) {
+      points.push_back({p.point, p.section, p.values, frf_row(study, p), characterise_row(p)});
+    }
     try {
       return studies.create_study(
           {study.file.name, std::string(to_string(study.file.models)), study.source.study_path.string(),

@@ -29,8 +29,18 @@ struct HarmonicCycle {
 
   double amplitude_m() const;
   double phase_rad() const;
+  double load_amplitude_N() const;
+  double load_phase_rad() const;
 };
 HarmonicCycle first_harmonics(const Observation& start, const Observation& end);
+
+/// The particles' force at ω split along the host's first harmonic z₁ = X sin(θ + φ_X):
+/// F_p,1 = −m_app z₁'' − c_eq z₁'.
+struct ApparentLoad {
+  double mass_kg = 0.0;
+  double damping_N_s_m = 0.0;
+};
+ApparentLoad apparent_load(const HarmonicCycle& cycle, double omega_rad_s);
 
 /// When a point is steady (defaults documented in docs/studies.md; `[frf]` sets them).
 struct SteadyStateCriterion {
@@ -43,17 +53,24 @@ struct SteadyStateCriterion {
   bool operator==(const SteadyStateCriterion&) const = default;
 };
 
-/// Feeds on successive cycles; settled once the last k changes are all within tolerance
-/// and at least min_cycles have run.
+/// Which first harmonic a steady state is judged on: the host's displacement (a host the
+/// excitation drives through its spring or mass) or the particles' force on it (a host whose
+/// motion is prescribed: its displacement is steady from the start).
+enum class SteadyWatch { displacement, load };
+
+/// Feeds on successive cycles; settled once the last k changes of the watched harmonic
+/// (amplitude and phase) are all within tolerance and at least min_cycles have run.
 class SteadyStateDetector {
  public:
-  explicit SteadyStateDetector(const SteadyStateCriterion& criterion) : criterion_(criterion) {}
+  explicit SteadyStateDetector(const SteadyStateCriterion& criterion, SteadyWatch watch = SteadyWatch::displacement)
+      : criterion_(criterion), watch_(watch) {}
   /// Adds the next cycle; true if the point is (now) settled.
   bool add(const HarmonicCycle& cycle);
   int cycles() const { return cycles_; }
 
  private:
   SteadyStateCriterion criterion_;
+  SteadyWatch watch_;
   HarmonicCycle last_;
   int cycles_ = 0;
   int streak_ = 0;

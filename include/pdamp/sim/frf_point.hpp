@@ -1,11 +1,16 @@
 #pragma once
-/// One point of a frequency response: the engine driven cycle by cycle at the scenario's
-/// excitation until the response is steady (analysis/frf_response.hpp), then over the
-/// measured cycles, whose metrics it returns.
+/// Points driven to a steady state cycle by cycle: a frequency-response point (the host
+/// driven at the scenario's excitation, analysis/frf_response.hpp) and a characterisation
+/// point (the container's motion prescribed, analysis/damper_characterisation.hpp). Both
+/// advance the engine one excitation period at a time until the watched first harmonic is
+/// steady (or not by the cap), then over the measured cycles, and store one sample per
+/// cycle boundary.
 
 #include <chrono>
 #include <functional>
+#include <vector>
 
+#include "pdamp/analysis/damper_characterisation.hpp"
 #include "pdamp/analysis/frf_response.hpp"
 #include "pdamp/analysis/recorder.hpp"
 #include "pdamp/model/engine.hpp"
@@ -13,16 +18,38 @@
 
 namespace pdamp {
 
+/// The cycles a point ran: the boundaries of its measured cycles and how it got there.
+struct SteadyCycles {
+  std::vector<Observation> measured;  ///< n + 1 observations at whole cycles
+  bool settled = false;
+  int cycles_to_steady = 0;  ///< cycles before the measured ones
+  int cycles_run = 0;
+  double wall_time_s = 0.0;
+};
+
+struct CycleHooks {
+  /// Sees the engine at t0 and at every cycle's end.
+  std::function<void(const Observation&)> at_boundary;
+  /// Advances the engine through one cycle to `t_end_s` (default: advance_to): where a
+  /// point looks inside its cycles.
+  std::function<void(Engine& engine, double t_end_s)> advance_cycle;
+};
+
+/// Advances `engine` (at its time t0, any state) to t0 + k T, T = 2π/ω, one cycle at a
+/// time: until `watch`'s first harmonic is settled, or not settled by the cap; the measured
+/// cycles are the n after settling, or the last n up to the cap. The engine's stop request
+/// ends it with Interrupted.
+SteadyCycles run_to_steady_state(Engine& engine, double omega_rad_s, const SteadyStateCriterion& criterion,
+                                 SteadyWatch watch, const CycleHooks& hooks = {});
+
 struct FrfPointOutcome {
   ResponseMetrics metrics;
   int cycles_run = 0;
   double wall_time_s = 0.0;
 };
 
-/// Advances `engine` (at its time t0, any state) to t0 + k T, T = 2π/ω, one cycle at a
-/// time: until settled, or not settled by the cap; the metrics are over the n cycles after
-/// settling, or the last n cycles up to the cap. `at_boundary` sees the engine at t0 and
-/// at every cycle's end. The engine's stop request ends it with Interrupted.
+/// A frequency-response point: run_to_steady_state on the host's displacement at the
+/// scenario's excitation, and its response metrics.
 FrfPointOutcome run_frf_point(Engine& engine, const Scenario& scenario, const SteadyStateCriterion& criterion,
                               const std::function<void(const Observation&)>& at_boundary = {});
 
@@ -37,5 +64,33 @@ struct FrfRun {
 /// progress; `result` receives the metrics and the final state if the run completes.
 RunOutcome run_frf_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
                               const RunControl& control, const SteadyStateCriterion& criterion, FrfRun& result);
+
+/// Instants per cycle at which a characterisation point looks for spheres touching the
+/// floor and the lid.
+inline constexpr int contact_instants_per_cycle = 64;
+
+struct CharacterisationPointOutcome {
+  CharacterisationMetrics metrics;
+  int cycles_run = 0;
+  double wall_time_s = 0.0;
+};
+
+/// A characterisation point (excitation.mode = prescribed): run_to_steady_state on the
+/// particles' force, each cycle advanced in contact_instants_per_cycle steps to find the
+/// spheres touching the floor and the lid, and its metrics. Throws InputError for another
+/// excitation mode.
+CharacterisationPointOutcome run_characterisation_point(
+    Engine& engine, const Scenario& scenario, const SteadyStateCriterion& criterion,
+    const std::function<void(const Observation&)>& at_boundary = {});
+
+struct CharacterisationRun {
+  CharacterisationPointOutcome point;
+  State final_state;  ///< the engine at the end of the last cycle
+};
+
+/// A characterisation point as a stored run, as run_frf_simulation.
+RunOutcome run_characterisation_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
+                                           const RunControl& control, const SteadyStateCriterion& criterion,
+                                           CharacterisationRun& result);
 
 }  // namespace pdamp

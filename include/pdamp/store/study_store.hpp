@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "pdamp/analysis/damper_characterisation.hpp"
 #include "pdamp/analysis/frf_response.hpp"
 #include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/run_store.hpp"
@@ -39,11 +40,24 @@ struct FrfPointRow {
   int previous_point = 0;  ///< 0: from the settled bed
 };
 
+/// A characterisation point's place on its curve (a row of `study_characterise_points`).
+struct CharacterisePointRow {
+  int curve = 0;
+  std::string model;  ///< "soft" or "hard"
+  bool empty = false;
+  double amplitude_m = 0.0;
+  std::optional<double> gamma_given;
+  double frequency_hz = 0.0;
+  int step = 0;
+  int previous_point = 0;  ///< 0: from the settled bed
+};
+
 struct NewStudyPoint {
   int point = 0;
   std::string section;
   std::vector<std::pair<std::string, std::string>> values;  ///< (scenario key, value text)
   std::optional<FrfPointRow> frf;
+  std::optional<CharacterisePointRow> characterise;
 };
 
 /// Where a frequency-response point ended: the next point of its curve starts there.
@@ -61,6 +75,24 @@ struct FrfPointResult {
   int cycles_run = 0;
   double particle_mass_kg = 0.0, wall_time_s = 0.0;
   FrfEndState end;
+};
+
+/// What a completed characterisation point stores (`study_characterise_metrics`,
+/// `study_point_states`).
+struct CharacterisePointResult {
+  std::int64_t run_id = 0;
+  CharacterisationMetrics metrics;
+  int cycles_run = 0;
+  double particle_mass_kg = 0.0, gravity_m_s2 = 0.0, free_height_m = 0.0, wall_time_s = 0.0;
+  FrfEndState end;
+};
+
+/// A row of the `study_characterisation` view: a point and, once completed, its metrics.
+struct CharacterisePointRecord {
+  int point = 0;
+  std::string status;
+  CharacterisePointRow place;
+  std::optional<CharacterisePointResult> result;
 };
 
 /// A row of the `study_frf` view: a point of a curve and, once completed, its metrics.
@@ -156,9 +188,12 @@ class StudyStore {
   std::vector<PointMetrics> metrics(std::int64_t study_id);
   /// Each frequency-response point with its place and, if completed, its metrics.
   std::vector<FrfPointRecord> frf_points(std::int64_t study_id);
-  /// The point each frequency-response point starts from, for those continuing another.
+  /// Each characterisation point with its place and, if completed, its metrics.
+  std::vector<CharacterisePointRecord> characterise_points(std::int64_t study_id);
+  /// The point each frequency-response or characterisation point starts from, for those
+  /// continuing another.
   std::map<int, int> previous_points(std::int64_t study_id);
-  /// The final state of a completed frequency-response point.
+  /// The final state of a completed frequency-response or characterisation point.
   std::optional<FrfEndState> end_state(std::int64_t study_id, int point);
 
   /// Marks a pending, failed or interrupted point running under `lease` and starts its
@@ -175,6 +210,11 @@ class StudyStore {
   /// is ignored. Returns the bed's state_id.
   std::int64_t complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& result,
                                   const Particles& end_spheres, double kinetic_J);
+  /// Completes a characterisation point's attempt with its metrics and final state, as
+  /// complete_frf_point.
+  std::int64_t complete_characterise_point(std::int64_t study_id, int point, int attempt,
+                                           const CharacterisePointResult& result, const Particles& end_spheres,
+                                           double kinetic_J);
   /// Ends the point's attempt as failed or interrupted with a message.
   void end_point(std::int64_t study_id, int point, int attempt, PointStatus status, const std::string& message);
   /// A point still running under `lease`, whose process is gone, ends as `status` (failed
@@ -196,6 +236,11 @@ class StudyStore {
 
  private:
   void insert_points(std::int64_t study_id, const std::vector<NewStudyPoint>& points);
+  /// In a transaction: the point's final state (its spheres as a bed under `label`) and its
+  /// completion. Returns the bed's state_id.
+  std::int64_t store_end_and_complete(std::int64_t study_id, int point, int attempt, const std::string& label,
+                                      const FrfEndState& end, const Particles& end_spheres, double kinetic_J,
+                                      double wall_time_s);
   sqlite::Database& db() { return *db_; }
   sqlite::Database* db_;
 };

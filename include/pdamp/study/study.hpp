@@ -44,13 +44,31 @@ struct FrfPoint {
   int previous = 0;                 ///< the point whose final state this one starts from; 0: the settled bed
 };
 
+/// Where a point of a characterisation sits: a curve is one model and frequency, its
+/// points along the amplitude axis, ascending.
+struct CharacterisePoint {
+  std::size_t section = 0;  ///< in StudyFile::characterisations
+  int curve = 0;            ///< 1, 2, ... over the study
+  Model model = Model::hard;
+  bool empty = false;        ///< the container without particles
+  std::string amplitude_m;   ///< A as written, or from Γ with 17 digits
+  std::string gamma;         ///< Γ as written ("" for an amplitude axis)
+  std::string frequency_hz;  ///< as written
+  int step = 0;              ///< 1, 2, ... along the curve
+  int previous = 0;          ///< the point whose final state this one starts from; 0: the settled bed
+};
+
 /// One point: the section it comes from and the scenario values it sets, in the
-/// section's key order; a frequency-response point also its place on its curve.
+/// section's key order; a frequency-response or characterisation point also its place on
+/// its curve.
 struct StudyPoint {
   int point = 0;  ///< 1, 2, ... over the whole study, in file order
   std::string section;
   std::vector<std::pair<std::string, std::string>> values;  ///< (scenario key, value text)
   std::optional<FrfPoint> frf;
+  std::optional<CharacterisePoint> characterise;
+  /// The point this one starts from (0: the settled bed).
+  int previous() const { return frf ? frf->previous : characterise ? characterise->previous : 0; }
 };
 
 /// Points a study may have without --force, and with it.
@@ -66,7 +84,9 @@ struct Study {
 /// Parses the study text and expands its points: the sweep sections in file order, each
 /// a grid whose first axis varies slowest; or the [frf] sections in file order, each its
 /// curves (model, then level, then up before down; its host-alone curve last), each
-/// curve's points in the order they run. A study over max_points_without_force points
+/// curve's points in the order they run; or the [characterise] sections, each its curves
+/// (model, then frequency), each along the amplitudes, ascending (amplitudes from Γ with
+/// the base scenario's gravity: none is refused). A study over max_points_without_force points
 /// needs `force`; none may exceed max_points. Throws InputError.
 Study make_study(StudySource source, bool force);
 
@@ -78,7 +98,7 @@ Study make_study(StudySource source, bool force);
 /// a bad value.
 Scenario point_scenario(const Study& study, const StudyPoint& point, const std::optional<HostState>& host_start = {});
 
-/// The steady-state criterion of a frequency-response point.
+/// The steady-state criterion of a frequency-response or characterisation point.
 const SteadyStateCriterion& point_criterion(const Study& study, const StudyPoint& point);
 
 /// Builds every point's scenario and checks that each of the study's models can run it,
@@ -92,15 +112,16 @@ void validate_study(const Study& study, const std::optional<SnapshotSettings>& s
 /// key's values (compared as expanded), and the base scenario's resolved keys.
 std::vector<std::string> study_differences(const Study& stored, const Study& now);
 
-/// Throws InputError if the study runs frequency-response curves, which `command`
-/// (e.g. Slurm's job arrays, a task per point) does not support: a curve's points run in
-/// order, each from the previous one's final state.
-void refuse_frf_study(const Study& study, const std::string& command);
+/// Throws InputError if the study runs frequency-response or characterisation curves,
+/// which `command` (e.g. Slurm's job arrays, a task per point) does not support: a curve's
+/// points run in order, each from the previous one's final state.
+void refuse_curve_study(const Study& study, const std::string& command);
 
 /// "key = value, key = value" of a point.
 std::string describe_values(const StudyPoint& point);
 
-/// "hard up, curve 2, step 5 after point 11" of a frequency-response point ("" for another).
+/// "hard up, curve 2, step 5 after point 11" of a frequency-response point, "hard 17 Hz,
+/// curve 2, ..." of a characterisation point ("" for another).
 std::string describe_curve(const StudyPoint& point);
 
 }  // namespace pdamp::study

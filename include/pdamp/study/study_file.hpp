@@ -71,14 +71,33 @@ struct FrfSection {
   std::vector<std::pair<std::string, std::string>> settings;  ///< scenario keys set on every point
 };
 
-/// What a study file says (its base scenario is read by study.hpp): sweeps or
-/// frequency-response sections, not both.
+/// The amplitude axis of a characterisation: the container's amplitude A (m), or
+/// Γ = A (2πf)² / |g|.
+enum class AmplitudeAxis { amplitude, gamma };
+
+/// A `[characterise]` or `[characterise.NAME]` section: the damper's container driven with
+/// prescribed motion over a grid of amplitude and frequency (docs/characterisation.md).
+struct CharacteriseSection {
+  std::string section;  ///< "characterise" or "characterise.NAME"
+  AmplitudeAxis axis = AmplitudeAxis::amplitude;
+  std::vector<std::string> amplitudes;      ///< A (m) or Γ, as written or expanded, ascending
+  std::vector<std::string> frequencies;     ///< Hz, ascending
+  FrfStart start = FrfStart::continuation;  ///< continuation runs along the amplitude axis
+  bool empty = false;                       ///< the container without particles
+  SteadyStateCriterion criterion;           ///< judged on the particles' force
+  std::optional<StudyModels> models;
+  std::vector<std::pair<std::string, std::string>> settings;  ///< scenario keys set on every point
+};
+
+/// What a study file says (its base scenario is read by study.hpp): sweeps,
+/// frequency-response sections or characterisation sections, one kind only.
 struct StudyFile {
   std::string name;
   std::string scenario;  ///< the base scenario file as written, relative to the study file
   StudyModels models = StudyModels::soft;
   std::vector<Sweep> sweeps;
   std::vector<FrfSection> frfs;
+  std::vector<CharacteriseSection> characterisations;
 };
 
 /// Parses a study file's text. `origin` names it in messages; `default_name` is the study's
@@ -93,6 +112,10 @@ std::vector<std::string> parse_sweep_values(const std::string& text, const std::
 /// An `[frf]` section from its header and its lines (frf_section.cpp). Throws InputError
 /// naming the line, the key and what is valid.
 FrfSection parse_frf_section(const ini::Section& header, const std::vector<ini::Entry>& entries);
+
+/// A `[characterise]` section from its header and its lines (frf_section.cpp). Throws
+/// InputError naming the line, the key and what is valid.
+CharacteriseSection parse_characterise_section(const ini::Section& header, const std::vector<ini::Entry>& entries);
 
 /// Why `key` cannot be set by a study, or nothing if it can (study_file.cpp).
 std::optional<std::string> unsettable_key(const std::string& key);

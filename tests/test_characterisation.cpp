@@ -1,0 +1,287 @@
+/// Characterisation studies ([characterise], docs/characterisation.md): the section's keys
+/// and mistakes, the curves it expands into, the physics of a bed at rest and of the empty
+/// container, the same bits for any --jobs and after a SIGKILL and resuming, and the damper
+/// table a characterisation gives the reduced model.
+#include <doctest/doctest.h>
+
+#include <csignal>
+#include <numbers>
+#include <thread>
+
+#include "pdamp/store/study_store.hpp"
+#include "pdamp/study/study.hpp"
+#include "study_compare.hpp"
+#include "test_process.hpp"
+#include "test_support.hpp"
+
+using namespace pdamp;
+using namespace pdamp::study;
+using namespace pdamp::test;
+
+namespace {
+
+/// A [characterise] study on small.ini, hard model unless the section says otherwise.
+std::string characterise_study(const std::string& sections) {
+  return "[study]\nscenario = " + small() + "\nmodels = hard\n\n" + sections;
+}
+
+Study study_of(const std::string& text, const std::string& base = "") {
+  return make_study({"/tmp/c.ini", text, small(), base}, false);
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+/// Every stored characterisation metric but the wall time that differs between two stores,
+/// bit for bit (or is missing from the second): the count.
+std::int64_t characterise_metric_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
+  sqlite::Database d(a);
+  d.exec("ATTACH '" + b.string() + "' AS b");
+  std::string differs = "y.point IS NULL";
+  for (const char* column :
+       {"settled", "cycles_to_steady", "cycles_run", "measured_cycles", "amplitude_m", "gamma", "apparent_mass_kg",
+        "apparent_mass_spread_kg", "equivalent_damping_N_s_m", "equivalent_damping_spread_N_s_m", "impact_J_per_cycle",
+        "friction_J_per_cycle", "loss_factor", "floor_contact_fraction", "lid_contact_fraction", "particle_mass_kg",
+        "gravity_m_s2", "free_height_m"}) {
+    differs += std::string(" OR x.") + column + " IS NOT y." + column;
+  }
+  sqlite::Statement q(d, "SELECT coalesce(sum(" + differs +
+                             "), -1) FROM main.study_characterise_metrics x LEFT JOIN b.study_characterise_metrics "
+                             "y USING (point)");
+  q.step();
+  return q.column_int(0);
+}
+
+}  // namespace
+
+TEST_CASE("[characterise] sections: a curve per model and frequency, up the amplitudes, Gamma turned into A") {
+  const Study s = study_of(
+      characterise_study("[characterise]\namplitudes = 0.002, 0.001, 0.0005\nfrequencies = 20, 15\nmodels = both\n"));
+  REQUIRE(s.points.size() == 12);
+  const StudyPoint& first = s.points[0];
+  REQUIRE(first.characterise);
+  CHECK(first.characterise->model == Model::soft);
+  CHECK(first.characterise->frequency_hz == "15");
+  CHECK(first.characterise->amplitude_m == "0.0005");
+  CHECK(first.characterise->previous == 0);
+  CHECK(s.points[1].characterise->previous == 1);
+  CHECK(s.points[2].characterise->amplitude_m == "0.002");
+  CHECK(s.points[3].characterise->previous == 0);  // the next frequency starts from the bed
+  CHECK(s.points[3].characterise->curve == 2);
+  CHECK(s.points[6].characterise->model == Model::hard);
+  const Scenario scenario = point_scenario(s, s.points[4]);
+  CHECK(scenario.excitation.mode == ExcitationMode::prescribed_motion);
+  CHECK(scenario.excitation.amplitude_m == 0.001);
+  CHECK(scenario.excitation.frequency_hz == 20);
+  CHECK(scenario.run.sample_interval_s == doctest::Approx(1.0 / 20).epsilon(1e-15));
+
+  const Study g = study_of(
+      characterise_study("[characterise]\ngammas = 0.5, 2\nfrequencies = 10, 20\nstart = bed\nempty = true\n"));
+  REQUIRE(g.points.size() == 4);
+  for (const auto& p : g.points) {
+    CHECK(p.characterise->previous == 0);
+    CHECK(point_scenario(g, p).particles.count == 0);
+  }
+  // Γ = A ω² / g with the base scenario's g.
+  const double omega = 2.0 * std::numbers::pi * 20;
+  const Scenario at_2 = point_scenario(g, g.points[3]);
+  CHECK(at_2.excitation.amplitude_m * omega * omega / 9.81 == doctest::Approx(2.0).epsilon(1e-14));
+  CHECK(g.points[3].characterise->gamma == "2");
+}
+
+TEST_CASE("[characterise] mistakes: one message naming the line, the key and what is valid") {
+  const std::string head = "[study]\nscenario = base.ini\nmodels = hard\n";
+  const std::string ok = "[characterise]\nfrequencies = 10, 20\n";
+  for (const auto& bad : std::vector<std::pair<std::string, std::string>>{
+           {ok + "amplitudes = 0.001\n", "amplitudes has 1 value: a characterisation needs two or more on each axis"},
+           {"[characterise]\namplitudes = 0.001, 0.002\nfrequencies = 10\n",
+            "frequencies has 1 value: a characterisation needs two or more"},
+           {ok + "amplitudes = -0.001, 0.002\n", "'-0.001': each amplitude (m, of the container's motion"},
+           {ok + "gammas = 0, 2\n", "'0': each Gamma"},
+           {ok + "amplitudes = 0.001, 0.002\ngammas = 1, 2\n", "gammas and amplitudes are both given"},
+           {"[characterise]\namplitudes = 0.001, 0.002\n", "[characterise] needs frequencies"},
+           {ok, "[characterise] needs amplitudes (m) or gammas"},
+           {ok + "amplitudes = 0.001, 0.002\nexcitation.mode = force\n", "excitation.mode is set by [characterise]"},
+           {ok + "amplitudes = 0.001, 0.002\nempty = 1\n", "empty = '1': must be true or false"},
+           {ok + "amplitudes = 0.001, 0.002\nlevels = 1\n", "levels is not an [characterise] key"},
+           {ok + "amplitudes = 0.001, 0.002\nhost.mass_kg = 1, 2\n", "a grid of characterisations is not supported"},
+           {ok + "amplitudes = 0.001, 0.002\n[frf]\nmode = force\nlevels = 1\nfrequencies = 10\n",
+            "a study has sections of one kind"},
+       }) {
+    CAPTURE(bad.first);
+    CHECK(error_of([&] { parse_study_file(head + bad.first, "test.ini", "t"); }).find(bad.second) != std::string::npos);
+  }
+  CHECK(error_of([&] {
+          study_of(characterise_study("[characterise]\ngammas = 1, 2\nfrequencies = 10, 20\n"),
+                   "[gravity]\ng_m_s2 = 0\n");
+        }).find("gammas: Gamma = A (2 pi f)^2 / g needs gravity, and the scenario has |g| = 0") != std::string::npos);
+}
+
+TEST_CASE("a bad [characterise] study, --snapshots and study submit exit 2 and write nothing") {
+  test::TempDir dir("characterise-bad");
+  const auto db = dir / "runs.sqlite";
+  const auto file = dir / "c.ini";
+  write_file(file, characterise_study("[characterise]\namplitudes = 0.001\nfrequencies = 10, 20\n"));
+  const Result one = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
+  CHECK(one.code == 2);
+  CHECK(one.err.find("amplitudes has 1 value") != std::string::npos);
+  CHECK(!std::filesystem::exists(db));
+  write_file(file, characterise_study("[characterise]\namplitudes = 0.001, 0.002\nfrequencies = 10, 20\n"));
+  const Result snapshots = pdamp_cli({"study", "run", file.string(), "--snapshots", "0.01", "--db", db.string()}, dir);
+  CHECK(snapshots.code == 2);
+  CHECK(snapshots.err.find("[characterise]: --snapshots is for [sweep] studies only") != std::string::npos);
+  const Result slurm = pdamp_cli({"study", "submit", file.string(), "--slurm", "--dry-run", "--db", db.string()}, dir);
+  CHECK(slurm.code == 2);
+  CHECK(slurm.err.find("study submit runs [sweep] studies only") != std::string::npos);
+  CHECK(!std::filesystem::exists(db));
+}
+
+// A bed resting on the floor moves with its container: its force on it is −m_p (z'' + g), so
+// m_app = m_p. The soft bed rests on contact springs far stiffer than the drive (its own
+// frequency ω_b well above ω): it follows the floor to (ω/ω_b)², and its contacts' viscous
+// damping shows in the first harmonic as about 2ζ (ω/ω_b)² m_p ω. The hard bed is rigid (a
+// resting sphere rides the floor exactly): both zero to rounding. So |c_eq| / (m_p ω) below
+// 1e-3 for both (the soft bed gives up to 3e-4 at Γ = 0.8, 20 Hz). The empty container has
+// no force at all: every metric exactly 0.
+TEST_CASE("a bed at rest has m_app = m_p within 1 % and c_eq about 0, the empty container exactly 0") {
+  test::TempDir dir("characterise-rest");
+  const auto db = dir / "runs.sqlite";
+  const auto file = dir / "c.ini";
+  write_file(file, characterise_study("[characterise.rest]\namplitudes = 0.0001, 0.0005\nfrequencies = 15, 20\n"
+                                      "models = both\nparticles.count = 40\nmin_cycles = 8\nmeasured_cycles = 6\n\n"
+                                      "[characterise.empty]\namplitudes = 0.0005, 0.003\nfrequencies = 15, 20\n"
+                                      "empty = true\n"));
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--jobs", "2"}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  RunStore store(db);
+  const auto points = StudyStore(store).characterise_points(1);
+  REQUIRE(points.size() == 12);
+  for (const auto& p : points) {
+    CAPTURE(p.point);
+    REQUIRE(p.result);
+    const CharacterisationMetrics& m = p.result->metrics;
+    CHECK(m.settled);
+    if (p.place.empty) {
+      CHECK(p.result->particle_mass_kg == 0.0);
+      for (const double zero : {m.apparent_mass_kg, m.equivalent_damping_N_s_m, m.apparent_mass_spread_kg,
+                                m.equivalent_damping_spread_N_s_m, m.impact_J_per_cycle, m.friction_J_per_cycle,
+                                m.loss_factor, m.floor_contact_fraction, m.lid_contact_fraction}) {
+        CHECK(zero == 0.0);
+      }
+      CHECK(p.result->free_height_m == 0.010);
+      continue;
+    }
+    const double m_p = p.result->particle_mass_kg;
+    const double omega = 2.0 * std::numbers::pi * p.place.frequency_hz;
+    CHECK(m.gamma < 1.0);
+    CHECK(std::abs(m.apparent_mass_kg / m_p - 1.0) < 0.01);
+    CHECK(std::abs(m.equivalent_damping_N_s_m) / (m_p * omega) < 1e-3);
+    CHECK(m.floor_contact_fraction == 1.0);
+    CHECK(m.lid_contact_fraction == 0.0);
+    CHECK(p.result->free_height_m > 0.0);
+    CHECK(p.result->free_height_m < 0.010);
+    CHECK(m.amplitude_m == doctest::Approx(p.place.amplitude_m).epsilon(1e-9));
+  }
+  const auto png = dir / "c.png";
+  const Result plot = pdamp_cli({"study", "plot", "1", "--db", db.string(), "--out", png.string()}, dir);
+  INFO(plot.err);
+  CHECK(plot.code == 0);
+  CHECK(std::filesystem::file_size(png) > 10'000);
+}
+
+// The container's work per cycle against the bed is π c_eq ω A² (only the force's first
+// harmonic works against a sinusoidal velocity), and at a steady state the bed dissipates
+// it: η from the ledger equals c_eq / (m_p ω) from the force, two independent routes.
+TEST_CASE("a shaken bed: the ledger's loss per cycle is the first harmonic's, the bed leaves the floor") {
+  test::TempDir dir("characterise-shaken");
+  const auto db = dir / "runs.sqlite";
+  const auto file = dir / "c.ini";
+  write_file(file, characterise_study("[characterise]\ngammas = 2, 4\nfrequencies = 15, 25\n"
+                                      "amplitude_tolerance = 0.02\nphase_tolerance_rad = 0.02\nmax_cycles = 40\n"));
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--jobs", "2"}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  RunStore store(db);
+  for (const auto& p : StudyStore(store).characterise_points(1)) {
+    CAPTURE(p.point);
+    REQUIRE(p.result);
+    const CharacterisationMetrics& m = p.result->metrics;
+    const double damping_ratio =
+        m.equivalent_damping_N_s_m / (p.result->particle_mass_kg * 2.0 * std::numbers::pi * p.place.frequency_hz);
+    CHECK(damping_ratio > 0.1);
+    CHECK(m.loss_factor == doctest::Approx(damping_ratio).epsilon(0.03));
+    CHECK(m.apparent_mass_kg < p.result->particle_mass_kg);
+    CHECK(m.floor_contact_fraction < 1.0);
+    CHECK(m.impact_J_per_cycle > 0.0);
+  }
+}
+
+TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SIGKILL and resuming") {
+  test::TempDir dir("characterise-jobs");
+  const auto file = dir / "c.ini";
+  // A tolerance only a bed at rest meets: the others run their 30 cycles.
+  write_file(file, characterise_study("[characterise]\namplitudes = 0.0005, 0.0015, 0.003\nfrequencies = 15, 20, 25\n"
+                                      "amplitude_tolerance = 1e-9\nmax_cycles = 30\nmeasured_cycles = 5\n"));
+  std::map<int, std::filesystem::path> stores;
+  for (const int jobs : {1, 2}) {
+    stores[jobs] = dir / ("jobs" + std::to_string(jobs) + ".sqlite");
+    const Result r =
+        pdamp_cli({"study", "run", file.string(), "--db", stores[jobs].string(), "--jobs", std::to_string(jobs)}, dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+  }
+  CHECK(count_rows(stores[2], "SELECT count(*) FROM study_characterise_metrics") == 9);
+  CHECK(characterise_metric_differences(stores[1], stores[2]) == 0);
+  const auto [differing, compared] = sample_differences(stores[1], stores[2]);
+  CHECK(compared > 9 * 15);
+  CHECK(differing == 0);
+
+  const auto killed = dir / "killed.sqlite";
+  {
+    Process study({"study", "run", file.string(), "--db", killed.string(), "--jobs", "2"}, dir, "study", Group::own);
+    for (int i = 0;
+         i < 3000 && !(std::filesystem::exists(killed) &&
+                       count_rows(killed,
+                                  "SELECT count(*) FROM sqlite_schema WHERE name = "
+                                  "'study_characterisation'") &&
+                       count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") >= 2);
+         ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    study.signal_group(SIGKILL);
+    CHECK(study.wait() == 128 + SIGKILL);
+  }
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 9);
+  // A point's metrics, final state and completion are one transaction: none without the others.
+  CHECK(count_rows(killed,
+                   "SELECT count(*) FROM study_points p WHERE (p.status = 'completed') <> (EXISTS (SELECT 1 FROM "
+                   "study_characterise_metrics m WHERE m.point = p.point) AND EXISTS (SELECT 1 FROM "
+                   "study_point_states s WHERE s.point = p.point))") == 0);
+  CHECK(count_rows(killed,
+                   "SELECT count(*) FROM initial_states WHERE settle_key LIKE 'characterisation point end:%' AND "
+                   "state_id NOT IN (SELECT state_id FROM study_point_states)") == 0);
+  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  CHECK(characterise_metric_differences(stores[1], killed) == 0);
+  CHECK(sample_differences(stores[1], killed).first == 0);
+
+  // Resuming skips completed points; a changed file is refused with the difference named.
+  const std::int64_t runs = count_rows(killed, "SELECT count(*) FROM runs");
+  const Result again = pdamp_cli({"study", "run", file.string(), "--db", killed.string()}, dir);
+  CHECK(again.code == 0);
+  CHECK(count_rows(killed, "SELECT count(*) FROM runs") == runs);
+  write_file(file, characterise_study("[characterise]\namplitudes = 0.0005, 0.0015, 0.004\nfrequencies = 15, 20, 25\n"
+                                      "amplitude_tolerance = 1e-9\nmax_cycles = 30\nmeasured_cycles = 5\n"));
+  const Result changed = pdamp_cli({"study", "run", file.string(), "--db", killed.string()}, dir);
+  CHECK(changed.code == 2);
+  CHECK(changed.err.find("[characterise] amplitudes: '0.0005, 0.0015, 0.004' now, '0.0005, 0.0015, 0.003' stored") !=
+        std::string::npos);
+}

@@ -5,7 +5,9 @@
 #include <doctest/doctest.h>
 
 #include <csignal>
+#include <fstream>
 #include <numbers>
+#include <sstream>
 #include <thread>
 
 #include "pdamp/store/study_store.hpp"
@@ -27,6 +29,13 @@ std::string characterise_study(const std::string& sections) {
 
 Study study_of(const std::string& text, const std::string& base = "") {
   return make_study({"/tmp/c.ini", text, small(), base}, false);
+}
+
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 std::string error_of(const std::function<void()>& f) {
@@ -194,6 +203,56 @@ TEST_CASE("a bed at rest has m_app = m_p within 1 % and c_eq about 0, the empty 
   INFO(plot.err);
   CHECK(plot.code == 0);
   CHECK(std::filesystem::file_size(png) > 10'000);
+
+  // The damper table: store -> pdamp rom's table -> CSV -> JSON -> CSV, the same text, and
+  // the same prediction from the store and from the file.
+  const std::vector<std::string> study_table{"rom", "--study", "1", "--db", db.string()};
+  auto rom = [&](std::vector<std::string> args, const std::vector<std::string>& more) {
+    args.insert(args.end(), more.begin(), more.end());
+    return pdamp_cli(args, dir);
+  };
+  const Result no_model = rom(study_table, {"--export-table", (dir / "t.csv").string()});
+  CHECK(no_model.code == 2);
+  CHECK(no_model.err.find("has models hard, soft: choose one with --model") != std::string::npos);
+  const Result no_section = rom(study_table, {"--model", "hard", "--export-table", (dir / "t.csv").string()});
+  CHECK(no_section.code == 2);
+  CHECK(no_section.err.find("has sections characterise.empty, characterise.rest: choose one with --section") !=
+        std::string::npos);
+  CHECK(!std::filesystem::exists(dir / "t.csv"));
+  const std::vector<std::string> rest{"--model", "hard", "--section", "characterise.rest"};
+  const std::vector<std::string> host{"--mass",  "0.0376", "--stiffness", "470",      "--damping", "0.1",
+                                      "--force", "0.002",  "--freq",      "15:20:11", "--quiet"};
+  auto with = [](std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  REQUIRE(rom(study_table, with(with(rest, host),
+                                {"--export-table", (dir / "t.csv").string(), "--out", (dir / "p_store.csv").string()}))
+              .code == 0);
+  // A host whose response the table does not cover at all is refused, nothing written.
+  CHECK(rom(study_table, with(rest, {"--mass", "0.0376", "--stiffness", "470", "--force", "5", "--freq", "15:20:3",
+                                     "--out", (dir / "p_none.csv").string()}))
+            .code == 2);
+  CHECK(!std::filesystem::exists(dir / "p_none.csv"));
+  const std::vector<std::string> from_csv{"rom", "--table", (dir / "t.csv").string()};
+  REQUIRE(
+      rom(from_csv, with(host, {"--export-table", (dir / "t.json").string(), "--out", (dir / "p_file.csv").string()}))
+          .code == 0);
+  REQUIRE(rom({"rom", "--table", (dir / "t.json").string()}, {"--export-table", (dir / "t2.csv").string()}).code == 0);
+  const std::string table_text = read_text(dir / "t.csv");
+  CHECK(table_text == read_text(dir / "t2.csv"));
+  CHECK(table_text.find("# source = study 1 'c', [characterise.rest], hard model") != std::string::npos);
+  CHECK(table_text.find("# bed_mass_kg = ") != std::string::npos);
+  auto rows = [](const std::string& text) {
+    std::string kept;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+      if (!line.starts_with('#')) kept += line + "\n";
+    }
+    return kept;
+  };
+  CHECK(rows(read_text(dir / "p_store.csv")) == rows(read_text(dir / "p_file.csv")));
+  CHECK(rows(read_text(dir / "p_file.csv")).size() > 200);
 }
 
 // The container's work per cycle against the bed is π c_eq ω A² (only the force's first
@@ -221,6 +280,19 @@ TEST_CASE("a shaken bed: the ledger's loss per cycle is the first harmonic's, th
     CHECK(m.floor_contact_fraction < 1.0);
     CHECK(m.impact_J_per_cycle > 0.0);
   }
+  // No damper table from a Gamma grid (its amplitudes differ by frequency) nor from another study kind.
+  const Result gammas =
+      pdamp_cli({"rom", "--study", "1", "--db", db.string(), "--export-table", (dir / "t.csv").string()}, dir);
+  CHECK(gammas.code == 2);
+  CHECK(gammas.err.find("gives gammas, so its amplitudes differ from frequency to frequency") != std::string::npos);
+  write_file(dir / "s.ini",
+             "[study]\nscenario = " + small() + "\nmodels = hard\n[sweep]\nrun.duration_s = 0.01, 0.02\n");
+  REQUIRE(pdamp_cli({"study", "run", (dir / "s.ini").string(), "--db", db.string()}, dir).code == 0);
+  const Result sweep =
+      pdamp_cli({"rom", "--study", "2", "--db", db.string(), "--export-table", (dir / "t.csv").string()}, dir);
+  CHECK(sweep.code == 2);
+  CHECK(sweep.err.find("is not a characterisation") != std::string::npos);
+  CHECK(!std::filesystem::exists(dir / "t.csv"));
 }
 
 TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SIGKILL and resuming") {
@@ -267,6 +339,11 @@ TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SI
   CHECK(count_rows(killed,
                    "SELECT count(*) FROM initial_states WHERE settle_key LIKE 'characterisation point end:%' AND "
                    "state_id NOT IN (SELECT state_id FROM study_point_states)") == 0);
+  // An incomplete characterisation gives no table.
+  const Result incomplete =
+      pdamp_cli({"rom", "--study", "1", "--db", killed.string(), "--export-table", (dir / "t.csv").string()}, dir);
+  CHECK(incomplete.code == 2);
+  CHECK(incomplete.err.find("are not completed; run 'pdamp study resume 1' first") != std::string::npos);
   const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);

@@ -4,12 +4,16 @@
 #include <chrono>
 #include <iomanip>
 #include <iostream>
+#include <map>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/rom/prediction_files.hpp"
 #include "pdamp/rom/table_files.hpp"
+#include "pdamp/store/study_store.hpp"
+#include "subcommand.hpp"
 #include "text_table.hpp"
 
 namespace po = boost::program_options;
@@ -26,6 +30,11 @@ double milliseconds_since(Clock::time_point start) {
 po::options_description rom_options() {
   po::options_description table("damper table");
   table.add_options()("table", po::value<std::string>(), "damper table file, .csv or .json (docs/rom.md, Table files)")(
+      "study", po::value<std::string>(), "or the table of a completed [characterise] study in the store")(
+      "model", po::value<std::string>(), "the study's model, soft or hard (needed if it ran both)")(
+      "section", po::value<std::string>(),
+      "the study's [characterise.NAME] section, one bed (needed if it has several)")(
+      "db", po::value<std::string>()->default_value("pdamp.sqlite"), "the store of --study")(
       "export-table", po::value<std::vector<std::string>>()->composing(),
       "write the table as FILE.csv or FILE.json (repeatable)");
   po::options_description host("host (single degree of freedom) and excitation");
@@ -41,7 +50,7 @@ po::options_description rom_options() {
                        "write the prediction as FILE.csv or FILE.json (repeatable)")("quiet", "no table on stdout")(
       "time", "print the time the prediction took on stderr")("help,h", "show this help");
   po::options_description all(
-      "pdamp rom --table FILE [--mass M --stiffness K [--damping C] --force F0|--base Y "
+      "pdamp rom --table FILE|--study ID [--mass M --stiffness K [--damping C] --force F0|--base Y "
       "--freq START:STOP:COUNT] [options]");
   all.add(table).add(host).add(output);
   return all;
@@ -60,10 +69,96 @@ void check_output(const std::filesystem::path& file, const std::string& what) {
   }
 }
 
-/// The table the command works on, and its name for messages and file headers. Later sources
-/// (a stored characterisation) add a branch here.
+/// The damper table of a completed characterisation: one model and one section (one bed), on
+/// its grid of amplitudes and frequencies. Throws InputError naming why a study cannot give one.
+rom::DamperTable characterisation_table(const po::variables_map& vm) {
+  OpenStudy open(vm["study"].as<std::string>(), vm["db"].as<std::string>(), StoreAccess::read);
+  const std::string where = "pdamp rom: study " + std::to_string(open.id) + " '" + open.record.name + "'";
+  const auto& sections = open.study.file.characterisations;
+  if (sections.empty()) {
+    throw InputError(where +
+                     " is not a characterisation (it has no [characterise] section); a damper table "
+                     "comes from one (docs/characterisation.md)");
+  }
+  std::set<std::string> models, names;
+  for (const auto& p : open.study.points) {
+    models.insert(std::string(to_string(p.characterise->model)));
+    names.insert(p.section);
+  }
+  auto chosen = [&](const char* option, const std::set<std::string>& present, const std::string& what) {
+    std::string list;
+    for (const auto& v : present) list += (list.empty() ? "" : ", ") + v;
+    if (vm.count(option)) {
+      const std::string value = vm[option].as<std::string>();
+      if (!present.contains(value)) {
+        throw InputError(where + ": --" + option + " " + value + ": the study's " + what + " are " + list);
+      }
+      return value;
+    }
+    if (present.size() > 1) {
+      throw InputError(where + " has " + what + " " + list + ": choose one with --" + option +
+                       (std::string(option) == "section" ? " (each section characterises its own bed)" : ""));
+    }
+    return *present.begin();
+  };
+  const std::string model = chosen("model", models, "models");
+  const std::string section = chosen("section", names, "sections");
+  const auto& definition =
+      *std::find_if(sections.begin(), sections.end(), [&](const auto& c) { return c.section == section; });
+  if (definition.axis == study::AmplitudeAxis::gamma) {
+    throw InputError(where + ": [" + section +
+                     "] gives gammas, so its amplitudes differ from frequency to frequency; the damper table is a "
+                     "grid of amplitude x frequency: characterise with amplitudes (m)");
+  }
+  rom::DamperTable table;
+  table.source =
+      "study " + std::to_string(open.id) + " '" + open.record.name + "', [" + section + "], " + model + " model";
+  std::map<std::pair<double, double>, rom::TablePoint> grid;  // by (frequency, amplitude)
+  std::set<double> amplitudes, frequencies;
+  int not_completed = 0;
+  for (const auto& c : open.studies.characterise_points(open.id)) {
+    if (c.place.model != model || open.study.points.at(static_cast<std::size_t>(c.point - 1)).section != section) {
+      continue;
+    }
+    if (!c.result) {
+      ++not_completed;
+      continue;
+    }
+    const CharacterisationMetrics& m = c.result->metrics;
+    table.bed_mass_kg = c.result->particle_mass_kg;
+    table.gravity_m_s2 = c.result->gravity_m_s2;
+    amplitudes.insert(c.place.amplitude_m);
+    frequencies.insert(c.place.frequency_hz);
+    grid[{c.place.frequency_hz, c.place.amplitude_m}] = {
+        {m.apparent_mass_kg, m.equivalent_damping_N_s_m, m.apparent_mass_spread_kg, m.equivalent_damping_spread_N_s_m},
+        m.settled};
+  }
+  if (not_completed > 0) {
+    throw InputError(where + ": " + std::to_string(not_completed) + " of its " + model + " points in [" + section +
+                     "] are not completed; run 'pdamp study resume " + std::to_string(open.id) + "' first");
+  }
+  table.amplitudes_m.assign(amplitudes.begin(), amplitudes.end());
+  table.frequencies_hz.assign(frequencies.begin(), frequencies.end());
+  for (const double f : table.frequencies_hz) {
+    for (const double a : table.amplitudes_m) table.points.push_back(grid.at({f, a}));
+  }
+  rom::validate_damper_table(table, where);
+  return table;
+}
+
+/// The table the command works on, and its name for messages and file headers: a table file
+/// or a stored characterisation.
 std::pair<rom::DamperTable, std::string> table_source(const po::variables_map& vm) {
-  if (!vm.count("table")) throw InputError("pdamp rom: --table is required (a damper table, .csv or .json)");
+  if (vm.count("table") == vm.count("study")) {
+    throw InputError("pdamp rom: give exactly one of --table FILE (.csv or .json) and --study ID (a characterisation)");
+  }
+  for (const char* option : {"model", "section"}) {
+    if (vm.count(option) && !vm.count("study"))
+      throw InputError(std::string("pdamp rom: --") + option + " is for --study");
+  }
+  if (vm.count("study")) {
+    return {characterisation_table(vm), vm["db"].as<std::string>() + ", study " + vm["study"].as<std::string>()};
+  }
   const std::string file = vm["table"].as<std::string>();
   return {rom::read_damper_table(file), file};
 }

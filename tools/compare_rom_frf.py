@@ -9,7 +9,7 @@ two neighbours (the grid's step would otherwise bound the frequency's resolution
 is the highest solution a stepped sine up holds (the [frf] curves are up sweeps), on a grid
 ten times finer.
 
-usage: tools/compare_rom_frf.py --frf-db FRF.sqlite --frf-study ID --char-db CHAR.sqlite --char-study ID
+usage: tools/compare_rom_frf.py --frf-db FRF.sqlite --frf-study ID (--char-db CHAR.sqlite --char-study ID | --table FILE)
                                 [--pdamp build/ci/src/pdamp] [--out FILE.png] [--model hard]
 """
 import argparse
@@ -69,7 +69,9 @@ def parabola_peak(points):
 def rom_curve(args, host, level, f_start, f_stop, count):
     """Rows of pdamp rom's prediction (CSV) for a force level."""
     mass, stiffness, damping = host
-    command = [args.pdamp, "rom", "--study", str(args.char_study), "--db", args.char_db, "--model", args.model,
+    table = ["--table", args.table] if args.table else ["--study", str(args.char_study), "--db", args.char_db,
+                                                        "--model", args.model]
+    command = [args.pdamp, "rom"] + table + [
                "--mass", repr(mass), "--stiffness", repr(stiffness), "--damping", repr(damping), "--force",
                repr(level), "--freq", f"{f_start!r}:{f_stop!r}:{count}", "--quiet"]
     with tempfile.TemporaryDirectory() as folder:
@@ -86,12 +88,15 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--frf-db", required=True)
     parser.add_argument("--frf-study", type=int, required=True)
-    parser.add_argument("--char-db", required=True)
-    parser.add_argument("--char-study", type=int, required=True)
+    parser.add_argument("--char-db")
+    parser.add_argument("--char-study", type=int)
+    parser.add_argument("--table", help="a damper table file instead of a stored characterisation")
     parser.add_argument("--model", default="hard")
     parser.add_argument("--pdamp", default="build/ci/src/pdamp")
     parser.add_argument("--out")
     args = parser.parse_args()
+    if bool(args.table) == bool(args.char_db and args.char_study):
+        fail(PROGRAM, "give --char-db and --char-study (a stored characterisation), or --table FILE")
     plt = pyplot(PROGRAM)
     db = sqlite3.connect(f"file:{args.frf_db}?mode=ro", uri=True)
     host = host_of(db, args.frf_study)
@@ -128,7 +133,8 @@ def main():
     ax.plot([], [], linestyle="none", marker="o", markerfacecolor="none", markeredgecolor="red", label="not settled")
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("|X| / (F0/K)")
-    ax.set_title(f"ROM (characterisation {args.char_study}) against the full simulation (FRF study {args.frf_study}), "
+    source = args.table or f"characterisation {args.char_study}"
+    ax.set_title(f"ROM ({source}) against the full simulation (FRF study {args.frf_study}), "
                  f"M = {host[0]:g} kg, K = {host[1]:g} N/m, C = {host[2]:g} N s/m", fontsize="small")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small")

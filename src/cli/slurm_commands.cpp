@@ -135,7 +135,7 @@ void report_collect(const CollectReport& report, std::ostream& out) {
 /// A new job script file, numbered after those in the folder.
 std::filesystem::path new_script(const ShardFolder& folder, const std::string& text) {
   for (int k = 1;; ++k) {
-    const auto file = folder.script(k);
+    auto file = folder.script(k);  // not const: returned by move
     const int fd = open(file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0755);
     if (fd < 0 && errno == EEXIST) continue;
     if (fd < 0) throw RuntimeFailure("cannot write the job script '" + file.string() + "': " + std::strerror(errno));

@@ -170,6 +170,7 @@ Apply number(double& (*field)(Scenario&), Range range) {
   return [field, range](Scenario& s, const Value& v) { field(s) = parse_in_range(v, range); };
 }
 
+// NOLINTNEXTLINE(bugprone-macro-parentheses): expr is a member path; s.(expr) would not compile
 #define PDAMP_FIELD(expr) [](Scenario& s) -> double& { return s.expr; }
 
 std::vector<KeySpec> soft_law_keys(const std::string& section, SoftContactLaw Scenario::*law,

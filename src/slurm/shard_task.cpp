@@ -49,7 +49,7 @@ study::PointResult run_in_shard(const std::filesystem::path& work, const study::
   StudyTask task = StudyTask::of(r.job, r.task, point.point);
   task.host = this_process_lease().host;
   studies.begin_task(record.study_id, task);
-  const study::PointResult result = study::run_study_point(store, record.study_id, study, point.point, control);
+  study::PointResult result = study::run_study_point(store, record.study_id, study, point.point, control);
   studies.end_task(record.study_id, r.job, r.task, result.status, result.message);
   store.make_self_contained();
   return result;

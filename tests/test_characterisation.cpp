@@ -301,35 +301,15 @@ TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SI
   // A tolerance only a bed at rest meets: the others run their 30 cycles.
   write_file(file, characterise_study("[characterise]\namplitudes = 0.0005, 0.0015, 0.003\nfrequencies = 15, 20, 25\n"
                                       "amplitude_tolerance = 1e-9\nmax_cycles = 30\nmeasured_cycles = 5\n"));
-  std::map<int, std::filesystem::path> stores;
-  for (const int jobs : {1, 2}) {
-    stores[jobs] = dir / ("jobs" + std::to_string(jobs) + ".sqlite");
-    const Result r =
-        pdamp_cli({"study", "run", file.string(), "--db", stores[jobs].string(), "--jobs", std::to_string(jobs)}, dir);
-    INFO(r.err);
-    REQUIRE(r.code == 0);
-  }
-  CHECK(count_rows(stores[2], "SELECT count(*) FROM study_characterise_metrics") == 9);
-  CHECK(characterise_metric_differences(stores[1], stores[2]) == 0);
-  const auto [differing, compared] = sample_differences(stores[1], stores[2]);
+  const auto stores = run_study_per_jobs(file, dir, {1, 2});
+  CHECK(count_rows(stores.at(2), "SELECT count(*) FROM study_characterise_metrics") == 9);
+  CHECK(characterise_metric_differences(stores.at(1), stores.at(2)) == 0);
+  const auto [differing, compared] = sample_differences(stores.at(1), stores.at(2));
   CHECK(compared > 9 * 15);
   CHECK(differing == 0);
 
   const auto killed = dir / "killed.sqlite";
-  {
-    Process study({"study", "run", file.string(), "--db", killed.string(), "--jobs", "2"}, dir, "study", Group::own);
-    for (int i = 0;
-         i < 3000 && !(std::filesystem::exists(killed) &&
-                       count_rows(killed,
-                                  "SELECT count(*) FROM sqlite_schema WHERE name = "
-                                  "'study_characterisation'") &&
-                       count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") >= 2);
-         ++i) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    study.signal_group(SIGKILL);
-    CHECK(study.wait() == 128 + SIGKILL);
-  }
+  kill_study_mid_run(file, killed, dir, "study_characterisation", 2);
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 9);
   // A point's metrics, final state and completion are one transaction: none without the others.
   CHECK(count_rows(killed,
@@ -347,8 +327,8 @@ TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SI
   const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
-  CHECK(characterise_metric_differences(stores[1], killed) == 0);
-  CHECK(sample_differences(stores[1], killed).first == 0);
+  CHECK(characterise_metric_differences(stores.at(1), killed) == 0);
+  CHECK(sample_differences(stores.at(1), killed).first == 0);
 
   // Resuming skips completed points; a changed file is refused with the difference named.
   const std::int64_t runs = count_rows(killed, "SELECT count(*) FROM runs");

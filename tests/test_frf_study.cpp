@@ -306,41 +306,23 @@ TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKIL
   const auto file = dir / "frf.ini";
   write_file(file, frf_study("levels = 0.05, 0.2\nfrequencies = 15, 17, 19\ndirection = both\nhost_alone = true\n"
                              "max_cycles = 60\n"));
-  std::map<int, std::filesystem::path> stores;
-  for (const int jobs : {1, 3}) {
-    stores[jobs] = dir / ("jobs" + std::to_string(jobs) + ".sqlite");
-    const Result r =
-        pdamp_cli({"study", "run", file.string(), "--db", stores[jobs].string(), "--jobs", std::to_string(jobs)}, dir);
-    INFO(r.err);
-    REQUIRE(r.code == 0);
-  }
-  CHECK(count_rows(stores[3], "SELECT count(*) FROM study_frf_metrics") == 15);
-  CHECK(frf_metric_differences(stores[1], stores[3]) == 0);
-  const auto [differing, compared] = sample_differences(stores[1], stores[3]);
+  const auto stores = run_study_per_jobs(file, dir, {1, 3});
+  CHECK(count_rows(stores.at(3), "SELECT count(*) FROM study_frf_metrics") == 15);
+  CHECK(frf_metric_differences(stores.at(1), stores.at(3)) == 0);
+  const auto [differing, compared] = sample_differences(stores.at(1), stores.at(3));
   CHECK(compared > 15 * 10);
   CHECK(differing == 0);
 
   // Killed with its workers once the first curve is under way: resumed, the same bits.
   const auto killed = dir / "killed.sqlite";
-  {
-    Process study({"study", "run", file.string(), "--db", killed.string(), "--jobs", "2"}, dir, "study", Group::own);
-    for (int i = 0;
-         i < 1200 && !(std::filesystem::exists(killed) &&
-                       count_rows(killed, "SELECT count(*) FROM sqlite_schema WHERE name = 'study_frf'") &&
-                       count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") >= 3);
-         ++i) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    study.signal_group(SIGKILL);
-    CHECK(study.wait() == 128 + SIGKILL);
-  }
+  kill_study_mid_run(file, killed, dir, "study_frf", 3);
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 15);
   CHECK(orphan_end_states(killed) == 0);
   const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
-  CHECK(frf_metric_differences(stores[1], killed) == 0);
-  CHECK(sample_differences(stores[1], killed).first == 0);
+  CHECK(frf_metric_differences(stores.at(1), killed) == 0);
+  CHECK(sample_differences(stores.at(1), killed).first == 0);
   CHECK(orphan_end_states(killed) == 0);
   CHECK(count_rows(killed, "SELECT count(*) FROM study_point_states") == 15);
 }

@@ -11,6 +11,8 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
+#include <map>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -130,6 +132,37 @@ inline std::int64_t count_rows(const std::filesystem::path& db, const std::strin
   sqlite::Statement q(d, sql);
   q.step();
   return q.column_int(0);
+}
+
+/// `pdamp study run FILE --jobs N` into its own store (DIR/jobsN.sqlite) for each N; each
+/// must succeed. The stores by N.
+inline std::map<int, std::filesystem::path> run_study_per_jobs(const std::filesystem::path& file, const TempDir& dir,
+                                                               std::initializer_list<int> jobs) {
+  std::map<int, std::filesystem::path> stores;
+  for (const int n : jobs) {
+    stores[n] = dir / ("jobs" + std::to_string(n) + ".sqlite");
+    const Result r =
+        pdamp_cli({"study", "run", file.string(), "--db", stores[n].string(), "--jobs", std::to_string(n)}, dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+  }
+  return stores;
+}
+
+/// `pdamp study run FILE --jobs 2` into `store`, killed with its workers by SIGKILL once the
+/// store has the view `view` and at least `completed` points completed (or after 30 s).
+inline void kill_study_mid_run(const std::filesystem::path& file, const std::filesystem::path& store,
+                               const TempDir& dir, const std::string& view, int completed) {
+  Process study({"study", "run", file.string(), "--db", store.string(), "--jobs", "2"}, dir, "study", Group::own);
+  for (int i = 0;
+       i < 3000 && !(std::filesystem::exists(store) &&
+                     count_rows(store, "SELECT count(*) FROM sqlite_schema WHERE name = '" + view + "'") &&
+                     count_rows(store, "SELECT count(*) FROM study_points WHERE status = 'completed'") >= completed);
+       ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  study.signal_group(SIGKILL);
+  CHECK(study.wait() == 128 + SIGKILL);
 }
 
 }  // namespace pdamp::test

@@ -142,13 +142,7 @@ TEST_CASE("a bad [characterise] study, --snapshots and study submit exit 2 and w
   CHECK(one.err.find("amplitudes has 1 value") != std::string::npos);
   CHECK(!std::filesystem::exists(db));
   write_file(file, characterise_study("[characterise]\namplitudes = 0.001, 0.002\nfrequencies = 10, 20\n"));
-  const Result snapshots = pdamp_cli({"study", "run", file.string(), "--snapshots", "0.01", "--db", db.string()}, dir);
-  CHECK(snapshots.code == 2);
-  CHECK(snapshots.err.find("[characterise]: --snapshots is for [sweep] studies only") != std::string::npos);
-  const Result slurm = pdamp_cli({"study", "submit", file.string(), "--slurm", "--dry-run", "--db", db.string()}, dir);
-  CHECK(slurm.code == 2);
-  CHECK(slurm.err.find("study submit runs [sweep] studies only") != std::string::npos);
-  CHECK(!std::filesystem::exists(db));
+  check_sweep_only_options_refused(file, db, dir, "[characterise]");
 }
 
 // A bed resting on the floor moves with its container: its force on it is −m_p (z'' + g), so

@@ -154,14 +154,7 @@ TEST_CASE("a bad [frf] study, --snapshots with [frf] and study submit of [frf] e
     CHECK(!std::filesystem::exists(db));
   }
   write_file(file, frf_study("levels = 0.1\nfrequencies = 10\n"));
-  const Result snapshots = pdamp_cli({"study", "run", file.string(), "--snapshots", "0.01", "--db", db.string()}, dir);
-  CHECK(snapshots.code == 2);
-  CHECK(snapshots.err.find("[frf]: --snapshots is for [sweep] studies only") != std::string::npos);
-  CHECK(!std::filesystem::exists(db));
-  const Result slurm = pdamp_cli({"study", "submit", file.string(), "--slurm", "--dry-run", "--db", db.string()}, dir);
-  CHECK(slurm.code == 2);
-  CHECK(slurm.err.find("study submit runs [sweep] studies only") != std::string::npos);
-  CHECK(!std::filesystem::exists(db));
+  check_sweep_only_options_refused(file, db, dir, "[frf]");
 }
 
 TEST_CASE("an [frf] host-alone curve gives the closed-form amplitude, phase and loss factor at every point") {

@@ -12,9 +12,9 @@
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/sim/stored_run.hpp"
-#include "pdamp/soft/soft_engine.hpp"
 #include "pdamp/store/run_store.hpp"
 #include "pdamp/version.hpp"
+#include "soft/soft_engine_class.hpp"
 #include "test_process.hpp"
 #include "test_support.hpp"
 

@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "pdamp/hard/event_queue.hpp"
+#include "hard/event_queue.hpp"
 
 using namespace pdamp::hard;
 

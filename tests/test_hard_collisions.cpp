@@ -11,10 +11,10 @@
 #include <random>
 #include <string>
 
-#include "pdamp/hard/collision_rules.hpp"
-#include "pdamp/hard/event_prediction.hpp"
-#include "pdamp/hard/neighbour_screen.hpp"
-#include "pdamp/hard/packed_particles.hpp"
+#include "hard/collision_rules.hpp"
+#include "hard/event_prediction.hpp"
+#include "hard/neighbour_screen.hpp"
+#include "hard/packed_particles.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;

@@ -8,8 +8,8 @@
 #include <numbers>
 #include <string>
 
-#include "pdamp/hard/event_diagnosis.hpp"
-#include "pdamp/hard/hard_engine.hpp"
+#include "hard/event_diagnosis.hpp"
+#include "hard/hard_engine_class.hpp"
 #include "pdamp/model/hertz_contact.hpp"
 #include "pdamp/model/placement.hpp"
 #include "test_support.hpp"

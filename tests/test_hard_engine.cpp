@@ -12,8 +12,8 @@
 #include <random>
 
 #include "benchmark_gas.hpp"
+#include "hard/hard_engine_class.hpp"
 #include "pdamp/errors.hpp"
-#include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/run.hpp"
 #include "test_support.hpp"

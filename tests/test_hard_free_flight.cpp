@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-#include "pdamp/hard/free_flight.hpp"
+#include "hard/free_flight.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;

@@ -10,9 +10,9 @@
 #include <random>
 #include <vector>
 
-#include "pdamp/hard/free_flight.hpp"
-#include "pdamp/hard/hard_ledger.hpp"
-#include "pdamp/hard/host_coupling.hpp"
+#include "hard/free_flight.hpp"
+#include "hard/hard_ledger.hpp"
+#include "hard/host_coupling.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;

@@ -9,8 +9,8 @@
 #include <random>
 #include <vector>
 
-#include "pdamp/hard/hard_engine.hpp"
-#include "pdamp/hard/jam_resolution.hpp"
+#include "hard/hard_engine_class.hpp"
+#include "hard/jam_resolution.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;

@@ -12,8 +12,8 @@
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
 #include "pdamp/soft/settling.hpp"
-#include "pdamp/soft/soft_engine.hpp"
 #include "pdamp/soft/time_step.hpp"
+#include "soft/soft_engine_class.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;

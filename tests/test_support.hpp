@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "engine_models.hpp"
-#include "pdamp/hard/event_queue.hpp"
+#include "hard/event_queue.hpp"
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
 #include "pdamp/model/scenario_loader.hpp"

@@ -3,7 +3,8 @@
 # docs/architecture.md: a folder may include its own headers, the top-level
 # include/pdamp/*.hpp, and the layers its row's last column names ("1–4, 6": numbers and
 # ranges, "—" for none). A folder that is not in the table is an error too, so that the
-# table stays complete.
+# table stays complete. A library's internal headers (src/soft/lanes.hpp, included as
+# "soft/lanes.hpp") may be included only by its own sources, never by a public header.
 #
 # Usage: tools/check-layers.sh
 # Prints each include that breaks the rule (file:line). Exit 0 if none, 1 otherwise, 2 if
@@ -66,6 +67,16 @@ for top in "$root/include/pdamp" "$root/src"; do
         broken=1
       fi
     done < <(grep -rn '#include "pdamp/' "$dir" || true)
+    while IFS=: read -r file line text; do
+      included=$(sed -E 's/.*#include "([^"]*)".*/\1/' <<<"$text")
+      if [ "$top" = "$root/include/pdamp" ]; then
+        echo "${file#"$root"/}:$line: a public header includes $included, an internal header of src/"
+        broken=1
+      elif [ "${included%%/*}" != "$folder" ]; then
+        echo "${file#"$root"/}:$line: $folder includes $included, an internal header of src/${included%%/*}"
+        broken=1
+      fi
+    done < <(grep -rnE '#include "[a-z_]+/' "$dir" | grep -v '#include "pdamp/' || true)
   done
 done
 exit "$broken"

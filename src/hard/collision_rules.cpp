@@ -1,4 +1,4 @@
-#include "pdamp/hard/collision_rules.hpp"
+#include "hard/collision_rules.hpp"
 
 #include <cmath>
 

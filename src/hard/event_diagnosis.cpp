@@ -1,4 +1,4 @@
-#include "pdamp/hard/event_diagnosis.hpp"
+#include "hard/event_diagnosis.hpp"
 
 #include <array>
 #include <cmath>

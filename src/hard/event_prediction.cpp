@@ -1,4 +1,4 @@
-#include "pdamp/hard/event_prediction.hpp"
+#include "hard/event_prediction.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "pdamp/hard/free_flight.hpp"
+#include "hard/free_flight.hpp"
 
 #include <unistd.h>
 

@@ -11,7 +11,7 @@
 /// engine it is restored into has already.
 #include <type_traits>
 
-#include "pdamp/hard/hard_engine.hpp"
+#include "hard/hard_engine_class.hpp"
 
 namespace pdamp::hard {
 

@@ -1,11 +1,10 @@
-#include "pdamp/hard/hard_engine.hpp"
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 
+#include "hard/hard_engine_class.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/model/placement.hpp"
 
@@ -466,6 +465,13 @@ void HardEngine::release_bed() {
   for (const int i : released) host_.detach(i, host, t_s_);
   restart_host(host);
   for (const int i : released) predict(i);
+}
+
+std::unique_ptr<Engine> make_hard_engine(const Scenario& scenario, const Particles& initial,
+                                         const RestitutionTable* calibration, bool diagnose_events) {
+  auto engine = std::make_unique<HardEngine>(scenario, initial, calibration);
+  if (diagnose_events) engine->diagnose_events(scenario);
+  return engine;
 }
 
 }  // namespace pdamp::hard

@@ -1,4 +1,4 @@
-#include "pdamp/hard/hard_ledger.hpp"
+#include "hard/hard_ledger.hpp"
 
 namespace pdamp::hard {
 

@@ -1,4 +1,4 @@
-#include "pdamp/hard/host_coupling.hpp"
+#include "hard/host_coupling.hpp"
 
 #include <algorithm>
 #include <cmath>

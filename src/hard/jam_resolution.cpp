@@ -1,10 +1,10 @@
-#include "pdamp/hard/jam_resolution.hpp"
+#include "hard/jam_resolution.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 #include <algorithm>
 
-#include "pdamp/hard/collision_rules.hpp"
+#include "hard/collision_rules.hpp"
 
 namespace pdamp::hard {
 

@@ -1,4 +1,4 @@
-#include "pdamp/hard/neighbour_screen.hpp"
+#include "hard/neighbour_screen.hpp"
 
 #include <immintrin.h>
 

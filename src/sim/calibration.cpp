@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <memory>
 #include <numbers>
 
 #include "pdamp/errors.hpp"
@@ -56,12 +57,12 @@ class Collision {
     }
     soft::SoftEngineOptions options;
     options.hold_host = true;
-    soft::SoftEngine engine(setting_, p, options);
-    const double dt = engine.time_step_s();
+    const std::unique_ptr<Engine> engine = soft::make_soft_engine(setting_, p, options);
+    const double dt = engine->time_step_s();
     bool touched = false;
     for (double t = dt; t < 50.0 * contact_time_s_ + 100.0 * dt; t += dt) {
       try {
-        engine.advance_to(t);
+        engine->advance_to(t);
       } catch (const RuntimeFailure& e) {
         // The soft law has no restitution to give at this speed (e.g. it cannot stop the impact).
         throw RuntimeFailure("calibrating the hard model's restitution from the soft law, an isolated " +
@@ -69,10 +70,10 @@ class Collision {
                              std::to_string(normal_speed_) + " m/s failed: " + e.what() +
                              "; use [hard] restitution = constant for this scenario");
       }
-      const bool touching = engine.observe().counters.contacts.value_or(0) > 0;
+      const bool touching = engine->observe().counters.contacts.value_or(0) > 0;
       touched |= touching;
       if (touched && !touching) {
-        const Particles out = engine.state().particles;
+        const Particles out = engine->state().particles;
         if (wall_) {
           const Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
           return {out.velocity_m_s.col(0) - radius_ * out.angular_velocity_rad_s.col(0).cross(n), n};

@@ -18,13 +18,11 @@ std::string describe_soft(const Scenario& scenario) { return "time step " + soft
 std::string describe_hard(const Scenario&) { return "event-driven, no time step"; }
 
 std::unique_ptr<Engine> make_soft(const EngineSetup&, const Scenario& scenario, const Particles& initial) {
-  return std::make_unique<soft::SoftEngine>(scenario, initial);
+  return soft::make_soft_engine(scenario, initial);
 }
 std::unique_ptr<Engine> make_hard(const EngineSetup& setup, const Scenario& scenario, const Particles& initial) {
-  auto engine =
-      std::make_unique<hard::HardEngine>(scenario, initial, setup.calibration ? &*setup.calibration : nullptr);
-  if (setup.diagnose_events) engine->diagnose_events(scenario);
-  return engine;
+  return hard::make_hard_engine(scenario, initial, setup.calibration ? &*setup.calibration : nullptr,
+                                setup.diagnose_events);
 }
 
 constexpr std::array<EngineKind, 2> kinds{{

@@ -1,4 +1,4 @@
-#include "pdamp/soft/neighbour_list.hpp"
+#include "soft/neighbour_list.hpp"
 
 #include <algorithm>
 #include <numeric>

@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "pdamp/errors.hpp"
-#include "pdamp/soft/soft_engine.hpp"
+#include "soft/soft_engine_class.hpp"
 
 namespace pdamp::soft {
 

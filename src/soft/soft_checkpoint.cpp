@@ -8,7 +8,7 @@
 /// contacts, the spare contact tables, the release order) and the threads' scratch.
 #include <span>
 
-#include "pdamp/soft/soft_engine.hpp"
+#include "soft/soft_engine_class.hpp"
 
 namespace pdamp::soft {
 namespace {

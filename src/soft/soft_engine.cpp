@@ -1,5 +1,3 @@
-#include "pdamp/soft/soft_engine.hpp"
-
 #include <omp.h>
 
 #include <Eigen/Geometry>
@@ -12,6 +10,7 @@
 
 #include "pdamp/errors.hpp"
 #include "pdamp/soft/time_step.hpp"
+#include "soft/soft_engine_class.hpp"
 
 namespace pdamp::soft {
 namespace {
@@ -879,6 +878,11 @@ std::vector<std::string> SoftEngine::warnings() const {
       << " % of a sphere radius (t = " << max_overlap_time_s_
       << " s): the contact law is soft for these impacts, so results depend on k_n there";
   return {msg.str()};
+}
+
+std::unique_ptr<Engine> make_soft_engine(const Scenario& scenario, const Particles& initial,
+                                         SoftEngineOptions options) {
+  return std::make_unique<SoftEngine>(scenario, initial, options);
 }
 
 }  // namespace pdamp::soft

@@ -29,8 +29,8 @@
 
 #include "benchmark_gas.hpp"
 #include "core_probe.hpp"
+#include "hard/hard_engine_class.hpp"
 #include "pdamp/errors.hpp"
-#include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/placement.hpp"
 
 using namespace pdamp;

@@ -35,11 +35,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "pdamp/hard/cell_members.hpp"
-#include "pdamp/hard/event_prediction.hpp"
-#include "pdamp/hard/free_flight.hpp"
-#include "pdamp/hard/hard_ledger.hpp"
-#include "pdamp/hard/particle_set.hpp"
+#include "hard/cell_members.hpp"
+#include "hard/event_prediction.hpp"
+#include "hard/free_flight.hpp"
+#include "hard/hard_ledger.hpp"
+#include "hard/particle_set.hpp"
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/host.hpp"
 #include "pdamp/scenario/scenario.hpp"

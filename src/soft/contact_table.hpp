@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "pdamp/model/checkpoint.hpp"
-#include "pdamp/soft/contact_law.hpp"
-#include "pdamp/soft/sphere_arrays.hpp"
+#include "soft/contact_law.hpp"
+#include "soft/sphere_arrays.hpp"
 
 namespace pdamp::soft {
 

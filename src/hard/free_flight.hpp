@@ -13,11 +13,11 @@
 #include <tuple>
 #include <vector>
 
-#include "pdamp/hard/cell_members.hpp"
-#include "pdamp/hard/event_prediction.hpp"
-#include "pdamp/hard/event_queue.hpp"
-#include "pdamp/hard/neighbour_screen.hpp"
-#include "pdamp/hard/packed_particles.hpp"
+#include "hard/cell_members.hpp"
+#include "hard/event_prediction.hpp"
+#include "hard/event_queue.hpp"
+#include "hard/neighbour_screen.hpp"
+#include "hard/packed_particles.hpp"
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/cell_grid.hpp"
 #include "pdamp/scenario/scenario.hpp"

@@ -12,7 +12,7 @@
 #include <array>
 #include <cstdint>
 
-#include "pdamp/hard/collision_rules.hpp"
+#include "hard/collision_rules.hpp"
 #include "pdamp/model/energy_ledger.hpp"
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/host.hpp"

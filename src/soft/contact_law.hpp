@@ -19,7 +19,7 @@
 /// energy balance is the integration error itself, O(Δt²).
 
 #include "pdamp/scenario/scenario.hpp"
-#include "pdamp/soft/lanes.hpp"
+#include "soft/lanes.hpp"
 
 namespace pdamp::soft {
 

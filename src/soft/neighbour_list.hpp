@@ -20,9 +20,9 @@
 #include <vector>
 
 #include "pdamp/model/cell_grid.hpp"
-#include "pdamp/soft/contact_table.hpp"
-#include "pdamp/soft/lanes.hpp"
-#include "pdamp/soft/sphere_arrays.hpp"
+#include "soft/contact_table.hpp"
+#include "soft/lanes.hpp"
+#include "soft/sphere_arrays.hpp"
 
 namespace pdamp::soft {
 

@@ -17,8 +17,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "pdamp/hard/hard_ledger.hpp"
-#include "pdamp/hard/packed_particles.hpp"
+#include "hard/hard_ledger.hpp"
+#include "hard/packed_particles.hpp"
 #include "pdamp/model/host.hpp"
 
 namespace pdamp::hard {

@@ -14,8 +14,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "pdamp/hard/event_prediction.hpp"
-#include "pdamp/hard/packed_particles.hpp"
+#include "hard/event_prediction.hpp"
+#include "hard/packed_particles.hpp"
 
 namespace pdamp::hard {
 

@@ -118,6 +118,8 @@ TEST_CASE("[characterise] mistakes: one message naming the line, the key and wha
            {ok, "[characterise] needs amplitudes (m) or gammas"},
            {ok + "amplitudes = 0.001, 0.002\nexcitation.mode = force\n", "excitation.mode is set by [characterise]"},
            {ok + "amplitudes = 0.001, 0.002\nempty = 1\n", "empty = '1': must be true or false"},
+           {ok + "amplitudes = 0.001, 0.002\nstart = predict\n",
+            "start = predict: the container's motion is prescribed, there is no host response to predict"},
            {ok + "amplitudes = 0.001, 0.002\nlevels = 1\n", "levels is not an [characterise] key"},
            {ok + "amplitudes = 0.001, 0.002\nhost.mass_kg = 1, 2\n", "a grid of characterisations is not supported"},
            {ok + "amplitudes = 0.001, 0.002\n[frf]\nmode = force\nlevels = 1\nfrequencies = 10\n",

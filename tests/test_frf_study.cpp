@@ -7,6 +7,7 @@
 #include <csignal>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <thread>
 
@@ -271,6 +272,77 @@ TEST_CASE("continuation: each point starts from the stored final state of the on
     CHECK(rows[1].result->metrics.apparent_mass_kg == next_point.metrics.apparent_mass_kg);
     CHECK(rows[1].result->cycles_run == next_point.cycles_run);
   }
+}
+
+TEST_CASE("start = predict: a continued point starts on its predicted steady state, the bed moved with the host") {
+  test::TempDir dir("frf-predict");
+  write_file(dir / "base.ini", "[host]\nz0_m = 0\ndamping_N_s_m = 1\n[particles]\ncount = 0\n");
+  // The host alone: the prediction is its exact steady state, so a continued point settles
+  // as soon as the criterion allows (min_cycles), where plain continuation sheds a transient.
+  std::map<std::string, std::vector<FrfPointRecord>> curves;
+  for (const std::string start : {"predict", "continue"}) {
+    const auto db = dir / (start + ".sqlite");
+    const auto file = dir / (start + ".ini");
+    write_file(file,
+               "[study]\nscenario = base.ini\nmodels = hard\n[frf]\nmode = force\nlevels = 0.2\n"
+               "frequencies = 12, 14, 16\namplitude_tolerance = 1e-9\nphase_tolerance_rad = 1e-9\n"
+               "start = " +
+                   start + "\n");
+    const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    RunStore store(db, StoreAccess::read);
+    curves[start] = StudyStore(store).frf_points(1);
+    REQUIRE(curves[start].size() == 3);
+  }
+  const int min_cycles = SteadyStateCriterion{}.min_cycles;
+  for (std::size_t k = 0; k < 3; ++k) {
+    CAPTURE(k);
+    const ResponseMetrics& predicted = curves["predict"][k].result->metrics;
+    const ResponseMetrics& continued = curves["continue"][k].result->metrics;
+    CHECK(predicted.settled);
+    CHECK(predicted.amplitude_m == doctest::Approx(continued.amplitude_m).epsilon(1e-6));
+    if (k == 0) {
+      CHECK(predicted.cycles_to_steady == continued.cycles_to_steady);  // both from the bed
+    } else {
+      CHECK(predicted.cycles_to_steady == min_cycles);
+      CHECK(continued.cycles_to_steady > 2 * min_cycles);
+    }
+  }
+
+  // With a bed: the second point's spheres are the first's final ones moved by the host's
+  // shift, stored as a bed of their own that the run names.
+  const auto db = dir / "bed.sqlite";
+  const auto file = dir / "bed.ini";
+  write_file(file, frf_study("levels = 0.2\nfrequencies = 16, 18\nmax_cycles = 40\nstart = predict\n"));
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  RunStore store(db, StoreAccess::read);
+  StudyStore studies(store);
+  const Study s = stored_study(*studies.study(1));
+  const auto end1 = studies.end_state(1, 1);
+  REQUIRE(end1);
+  const auto rows = studies.frf_points(1);
+  const HostState shift =
+      predicted_shift(rows[0].result->metrics, 2 * std::numbers::pi * 16.0, HostModel(point_scenario(s, s.points[1])));
+  CHECK(std::abs(shift.z_m) > 0.0);
+  const std::int64_t run2 = rows[1].result->run_id;
+  const std::int64_t start2 =
+      count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = " + std::to_string(run2));
+  CHECK(start2 != end1->state_id);
+  const Particles before = store.load_initial_particles(end1->state_id);
+  const Particles after = store.load_initial_particles(start2);
+  REQUIRE(after.size() == before.size());
+  for (Eigen::Index i = 0; i < before.size(); ++i) {
+    CHECK(after.position_m(0, i) == before.position_m(0, i));
+    CHECK(after.position_m(2, i) == before.position_m(2, i) + shift.z_m);
+    CHECK(after.velocity_m_s(2, i) == before.velocity_m_s(2, i) + shift.v_m_s);
+    CHECK(after.angular_velocity_rad_s.col(i) == before.angular_velocity_rad_s.col(i));
+  }
+  const Observation first = store.results(run2).samples.front().observation;
+  CHECK(first.host.z_m == doctest::Approx(end1->host.z_m + shift.z_m).epsilon(1e-12));
+  CHECK(first.host.v_m_s == doctest::Approx(end1->host.v_m_s + shift.v_m_s).epsilon(1e-12));
 }
 
 TEST_CASE("a point's final state and its completion are one transaction: refused, neither is stored") {

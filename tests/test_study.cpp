@@ -245,6 +245,17 @@ TEST_CASE("the Table 4 study's points are exactly the Table 4 scenario files") {
   }
 }
 
+TEST_CASE("every study file in data/studies is valid: every point of every model") {
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(test::source_dir() / "data" / "studies")) {
+    if (entry.path().extension() != ".ini") continue;
+    CAPTURE(entry.path().string());
+    ++files;
+    CHECK_NOTHROW(validate_study(make_study(read_study_source(entry.path()), false)));
+  }
+  CHECK(files >= 7);
+}
+
 TEST_CASE("a study counts as changed only if it would run other points, and every difference is named") {
   const std::string body = "[sweep]\nparticles.count = 10, 20\nhost.damping_N_s_m = 0.1:0.3:3\n";
   const Study stored = study_of(body);

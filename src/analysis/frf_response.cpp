@@ -60,6 +60,14 @@ bool SteadyStateDetector::add(const HarmonicCycle& cycle) {
   return cycles_ >= criterion_.min_cycles && streak_ >= criterion_.consecutive_cycles;
 }
 
+HostState predicted_shift(const ResponseMetrics& previous, double previous_omega_rad_s, const HostModel& next) {
+  const HostModel::Harmonic forced = next.forced_response(previous.apparent_mass_kg, previous.equivalent_damping_N_s_m);
+  const double angle = next.excitation_phase().phase_rad + previous.phase_rad;
+  const double x = previous.amplitude_m;
+  return {forced.cos_m - x * std::sin(angle),
+          next.angular_frequency_rad_s() * forced.sin_m - previous_omega_rad_s * x * std::cos(angle)};
+}
+
 FrfDrive FrfDrive::of(const Scenario& scenario) {
   const ExcitationSettings& e = scenario.excitation;
   if (e.mode != ExcitationMode::force && e.mode != ExcitationMode::base_motion) {

@@ -29,6 +29,16 @@ HostModel::HostModel(const Scenario& scenario)
   }
 }
 
+HostModel::Harmonic HostModel::forced_response(double added_mass_kg, double added_damping_N_s_m) const {
+  if (mode_ != ExcitationMode::base_motion && mode_ != ExcitationMode::force) return {};
+  // Particular solution P sin ωt + Q cos ωt of M z'' + C z' + K z = a sin ωt + b cos ωt.
+  const double a = forcing_sin_N_, b = forcing_cos_N_, w = omega_;
+  const double mass_kg = mass_kg_ + added_mass_kg;
+  const double kd = stiffness_N_m_ - mass_kg * w * w, cd = (damping_N_s_m_ + added_damping_N_s_m) * w;
+  const double det = kd * kd + cd * cd;
+  return {(kd * a + cd * b) / det, (kd * b - cd * a) / det};
+}
+
 HostState HostModel::initial_state() const {
   if (has_infinite_mass()) return prescribed_state(0.0);
   return {z0_m_, v0_m_s_};
@@ -145,13 +155,9 @@ HostTrajectory::HostTrajectory(const HostModel& model, double t0_s, HostState st
   }
   const double k = model.stiffness_N_m(), c = model.damping_N_s_m();
   offset_m_ = added_force_N / k;
-  if (model.mode() == ExcitationMode::base_motion || model.mode() == ExcitationMode::force) {
-    // Particular solution P sin ωt + Q cos ωt of M z'' + C z' + K z = a sin ωt + b cos ωt.
-    const double a = model.forcing_sin_N(), b = model.forcing_cos_N();
-    const double kd = k - mass_kg_ * w * w, cd = c * w, det = kd * kd + cd * cd;
-    forced_sin_m_ = (kd * a + cd * b) / det;
-    forced_cos_m_ = (kd * b - cd * a) / det;
-  }
+  const HostModel::Harmonic forced = model.forced_response(added_mass_kg, 0.0);
+  forced_sin_m_ = forced.sin_m;
+  forced_cos_m_ = forced.cos_m;
   const double forced_z = forced_sin_m_ * std::sin(w * t0_s) + forced_cos_m_ * std::cos(w * t0_s);
   const double forced_v = w * (forced_sin_m_ * std::cos(w * t0_s) - forced_cos_m_ * std::sin(w * t0_s));
   u0_m_ = start.z_m - offset_m_ - forced_z;

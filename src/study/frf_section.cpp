@@ -14,8 +14,8 @@ namespace {
 
 constexpr std::array<std::pair<FrfDirection, std::string_view>, 3> direction_names{
     {{FrfDirection::up, "up"}, {FrfDirection::down, "down"}, {FrfDirection::both, "both"}}};
-constexpr std::array<std::pair<FrfStart, std::string_view>, 2> start_names{
-    {{FrfStart::continuation, "continue"}, {FrfStart::bed, "bed"}}};
+constexpr std::array<std::pair<FrfStart, std::string_view>, 3> start_names{
+    {{FrfStart::continuation, "continue"}, {FrfStart::bed, "bed"}, {FrfStart::prediction, "predict"}}};
 
 /// Keys [frf] sets itself on every point, which a section may not set.
 constexpr std::array<std::string_view, 6> keys_set_by_frf{"excitation.mode",        "excitation.force_N",
@@ -73,8 +73,9 @@ class SteadySectionParser {
       frequencies = ascending(positive_values(v, "each frequency (Hz) must be > 0"));
     } else if (entry.key == "start") {
       start = choice(start_names, v,
-                     "continue (each point from the previous point's final state) or bed (every point from the "
-                     "settled bed)");
+                     "continue (each point from the previous point's final state), predict (the same, with the "
+                     "host and the bed moved onto the predicted steady state; [frf] only) or bed (every point "
+                     "from the settled bed)");
     } else if (entry.key == "models") {
       if (v != "soft" && v != "hard" && v != "both") fail("= '" + ini::printable(v) + "': must be soft, hard or both");
       models = v == "soft" ? StudyModels::soft : v == "hard" ? StudyModels::hard : StudyModels::both;
@@ -261,6 +262,11 @@ class CharacteriseParser : SteadySectionParser {
       c_.empty = flag(v);
     } else if (common_key(entry, c_.frequencies, c_.start, c_.models, c_.criterion)) {
       if (entry.key == "frequencies") at_least_two(c_.frequencies, "frequency");
+      if (c_.start == FrfStart::prediction) {
+        fail(
+            "= predict: the container's motion is prescribed, there is no host response to predict; use "
+            "continue or bed");
+      }
     } else {
       scenario_key(entry.key, v, c_.settings);
     }

@@ -111,14 +111,30 @@ class PointExecution {
     return *bed;
   }
 
+  /// The spheres a continued point starts from: the previous point's final ones, or, moved
+  /// by `shift` (start = predict), those stored as a bed of their own, so that the run
+  /// names the state it started from.
+  InitialBed continued_bed(const FrfEndState& from, const std::optional<HostState>& shift) {
+    Particles spheres = store_->load_initial_particles(from.state_id);
+    if (!shift) return {std::move(spheres), from.state_id, true, from.t_s};
+    for (Eigen::Index i = 0; i < spheres.size(); ++i) {
+      spheres.position_m(2, i) += shift->z_m;
+      spheres.velocity_m_s(2, i) += shift->v_m_s;
+    }
+    const std::int64_t state_id =
+        store_->save_initial_state("frequency-response point start: study " + std::to_string(study_id_) + " point " +
+                                       std::to_string(point_) + " predicted from run " + std::to_string(from.run_id),
+                                   spheres, from.t_s, kinetic_energy_J(spheres), 0.0);
+    return {std::move(spheres), state_id, true, from.t_s};
+  }
+
   /// A point run cycle by cycle (`plan.body` set), from the previous point's final state
-  /// `from` or from the settled bed, into the store linked to the point.
+  /// `from` (moved by `shift`) or from the settled bed, into the store linked to the point.
   StoredRun run_cycles(const Scenario& scenario, Model model, const RunPlan& plan,
-                       const std::optional<FrfEndState>& from) {
+                       const std::optional<FrfEndState>& from, const std::optional<HostState>& shift = {}) {
     std::optional<InitialBed> bed;
     const BedSource bed_source = [&]() -> const InitialBed& {
-      if (!bed && from)
-        bed = InitialBed{store_->load_initial_particles(from->state_id), from->state_id, true, from->t_s};
+      if (!bed && from) bed = continued_bed(*from, shift);
       return settled_bed(scenario, bed);
     };
     const std::string_view name = to_string(model);
@@ -135,7 +151,10 @@ class PointExecution {
   PointRuns run_frf(const StudyPoint& point) {
     const FrfPoint& frf = *point.frf;
     const std::optional<FrfEndState> from = start_state(frf.previous);
-    const Scenario scenario = point_scenario(*study_, point, from ? std::optional(from->host) : std::nullopt);
+    const std::optional<HostState> shift = from ? predicted_start_shift(point) : std::nullopt;
+    std::optional<HostState> host;
+    if (from) host = shift ? HostState{from->host.z_m + shift->z_m, from->host.v_m_s + shift->v_m_s} : from->host;
+    const Scenario scenario = point_scenario(*study_, point, host);
     RunPlan plan = plan_run(frf.model, scenario);
     FrfRun frf_run;
     plan.body = [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s,
@@ -143,7 +162,7 @@ class PointExecution {
       return run_frf_simulation(engine, s, recorder, c, criterion, frf_run);
     };
     PointRuns result;
-    result.runs.push_back(run_cycles(scenario, frf.model, plan, from));
+    result.runs.push_back(run_cycles(scenario, frf.model, plan, from, shift));
     const StoredRun& run = result.runs.back();
     if (run.outcome.status != RunStatus::completed) return result;
     const State& end = frf_run.final_state;
@@ -155,6 +174,22 @@ class PointExecution {
                                 {run.run_id, 0, end.observation.t_s, end.observation.host}};
     result.end_spheres = end.particles;
     return result;
+  }
+
+  /// With start = predict, how far a continued point moves the host and its bed from the
+  /// previous point's end (predicted_shift, from that point's stored metrics).
+  std::optional<HostState> predicted_start_shift(const StudyPoint& point) {
+    if (study_->file.frfs.at(point.frf->section).start != FrfStart::prediction) return std::nullopt;
+    const int previous = point.frf->previous;
+    const auto rows = studies_.frf_points(study_id_);
+    const auto row = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return r.point == previous; });
+    if (row == rows.end() || !row->result) {
+      throw RuntimeFailure("point " + std::to_string(point_) + " is predicted from point " + std::to_string(previous) +
+                           ", whose metrics are not stored");
+    }
+    const StudyPoint& before = study_->points.at(static_cast<std::size_t>(previous - 1));
+    const double previous_omega_rad_s = point_scenario(*study_, before).excitation.angular_frequency_rad_s();
+    return predicted_shift(row->result->metrics, previous_omega_rad_s, HostModel(point_scenario(*study_, point)));
   }
 
   /// A characterisation point: the container's prescribed motion (time restarts at 0 on

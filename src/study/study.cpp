@@ -134,7 +134,7 @@ void expand_characterisation(const Study& study, std::size_t section, std::vecto
           place.amplitude_m = exact(std::stod(c.amplitudes[i]) * g_m_s2 / (omega_rad_s * omega_rad_s));
         }
         StudyPoint p{static_cast<int>(points.size()) + 1, c.section, c.settings, std::nullopt, place};
-        p.characterise->previous = c.start == FrfStart::continuation && i > 0 ? p.point - 1 : 0;
+        p.characterise->previous = continues(c.start) && i > 0 ? p.point - 1 : 0;
         p.values.emplace_back("excitation.mode", "prescribed");
         p.values.emplace_back("excitation.amplitude_m", place.amplitude_m);
         p.values.emplace_back("excitation.frequency_hz", frequency);
@@ -159,7 +159,7 @@ void expand(const StudyFile& file, std::size_t section, std::vector<StudyPoint>&
       StudyPoint p{static_cast<int>(points.size()) + 1, frf.section, frf.settings, curve, std::nullopt};
       p.frf->frequency_hz = frequencies[i];
       p.frf->step = static_cast<int>(i) + 1;
-      p.frf->previous = frf.start == FrfStart::continuation && i > 0 ? p.point - 1 : 0;
+      p.frf->previous = continues(frf.start) && i > 0 ? p.point - 1 : 0;
       p.values.emplace_back("excitation.mode", base ? "base" : "force");
       p.values.emplace_back(base ? "excitation.amplitude_m" : "excitation.force_N", curve.level);
       p.values.emplace_back("excitation.frequency_hz", frequencies[i]);

@@ -15,6 +15,7 @@
 
 #include <vector>
 
+#include "pdamp/model/host.hpp"
 #include "pdamp/model/state.hpp"
 #include "pdamp/scenario/scenario.hpp"
 
@@ -106,5 +107,14 @@ struct ResponseMetrics {
 /// cycles, at least two).
 ResponseMetrics response_metrics(const std::vector<Observation>& boundaries, const FrfDrive& drive, bool settled,
                                  int cycles_to_steady);
+
+/// Continuation with a predictor (`start = predict`, docs/studies.md): how far to move the
+/// host, and the spheres rigidly with it, from the end of a point (a whole number of its
+/// cycles, where θ = φ) so that the next point starts on its predicted steady state. The
+/// prediction is the harmonic balance of `next` (the host at the new ω) carrying the
+/// previous point's apparent mass and equivalent damping; the shift is that harmonic at
+/// t = 0 less the previous point's measured first harmonic at its end. Host alone, it is
+/// the exact steady state.
+HostState predicted_shift(const ResponseMetrics& previous, double previous_omega_rad_s, const HostModel& next);
 
 }  // namespace pdamp

@@ -71,6 +71,16 @@ class HostModel {
   double forcing_sin_N() const { return forcing_sin_N_; }
   double forcing_cos_N() const { return forcing_cos_N_; }
 
+  /// z₁ = sin_m sin ωt + cos_m cos ωt.
+  struct Harmonic {
+    double sin_m = 0.0, cos_m = 0.0;
+  };
+  /// The steady forced response (base and force modes) of the host with mass and viscous
+  /// damping added on its absolute motion, (M + m) z'' + (C + c) z' + K z = forcing: the
+  /// host alone (0, 0), the riding bed (its mass, 0), or a bed's apparent mass and
+  /// equivalent damping at ω.
+  Harmonic forced_response(double added_mass_kg, double added_damping_N_s_m) const;
+
  private:
   ExcitationMode mode_;
   double mass_kg_, stiffness_N_m_, damping_N_s_m_;

@@ -54,7 +54,10 @@ std::string_view to_string(FrfDirection direction);
 enum class FrfStart {
   continuation,  ///< from the previous point's final state (the curve's first: the settled bed)
   bed,           ///< every point from the settled bed
+  prediction,    ///< continuation with the host moved onto its predicted steady state ([frf] only)
 };
+/// Whether a point starts from the previous point's final state.
+inline bool continues(FrfStart start) { return start != FrfStart::bed; }
 std::string_view to_string(FrfStart start);
 
 /// An `[frf]` or `[frf.NAME]` section: stepped-sine response curves (docs/studies.md).

@@ -762,12 +762,21 @@ void SoftEngine::add_reactions() {
 
 void SoftEngine::add_host_forces(double dt_s) {
   if (options_.hold_host) return;
-  // The forces act at the end of the step (the damper on the half-step velocity, as the
-  // contacts' dashpots); the books take the trapezoid of each over the step's displacements.
+  // The forces act at the end of the step; the books take the trapezoid of each over the
+  // step's displacements. The damper acts on the velocity at the step's end, which the
+  // coming half-kick gives: v = v_half + h (F(z, v) + F_p) / M, h = dt/2, linear in v, so
+  // solved exactly. On the half-step velocity, as the contacts' dashpots, it would lag
+  // by dt/2 and shift the host's response by C ω² dt / (2 |D|) (docs/soft-engine.md).
   const double y = host_model_.base_position_m(t_s_);
-  host_other_force_N_ = host_model_.force_N(t_s_, host_);
+  const double h_s = 0.5 * dt_s, mass_kg = host_model_.mass_kg(), damping_N_s_m = host_model_.damping_N_s_m();
+  const double without_damper_N = host_model_.force_N(t_s_, {host_.z_m, 0.0});
+  const double v_end_m_s = host_model_.has_infinite_mass()
+                               ? host_.v_m_s
+                               : (host_.v_m_s + h_s * (without_damper_N + host_particle_force_N_) / mass_kg) /
+                                     (1.0 + h_s * damping_N_s_m / mass_kg);
+  host_other_force_N_ = host_model_.force_N(t_s_, {host_.z_m, v_end_m_s});
   const HostForces now{host_.z_m - y,
-                       host_.v_m_s - host_model_.base_velocity_m_s(t_s_),
+                       v_end_m_s - host_model_.base_velocity_m_s(t_s_),
                        host_model_.applied_force_N(t_s_),
                        host_particle_force_N_,
                        host_.z_m,

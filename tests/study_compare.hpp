@@ -85,4 +85,37 @@ inline std::int64_t metric_differences(const std::filesystem::path& a, const std
   return q.column_int(0);
 }
 
+/// How many of the curve points' metrics in `table` (all but the wall time) differ between
+/// two stores, bit for bit, or are missing from the second; -1 if the first has none.
+inline std::int64_t curve_metric_differences(const std::filesystem::path& a, const std::filesystem::path& b,
+                                             const std::string& table, std::initializer_list<const char*> columns) {
+  sqlite::Database d(a);
+  d.exec("ATTACH '" + b.string() + "' AS b");
+  std::string differs = "y.point IS NULL";
+  for (const char* column : columns) differs += std::string(" OR x.") + column + " IS NOT y." + column;
+  sqlite::Statement q(d, "SELECT coalesce(sum(" + differs + "), -1) FROM main." + table + " x LEFT JOIN b." + table +
+                             " y USING (point)");
+  q.step();
+  return q.column_int(0);
+}
+
+/// Every stored frequency-response metric but the wall time that differs (study_frf_metrics).
+inline std::int64_t frf_metric_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
+  return curve_metric_differences(
+      a, b, "study_frf_metrics",
+      {"settled", "cycles_to_steady", "cycles_run", "measured_cycles", "amplitude_m", "amplitude_spread_m", "phase_rad",
+       "normalised_amplitude", "gamma", "impact_J_per_cycle", "friction_J_per_cycle", "viscous_J_per_cycle",
+       "loss_factor", "apparent_mass_kg", "equivalent_damping_N_s_m", "particle_mass_kg"});
+}
+
+/// Every stored characterisation metric but the wall time that differs (study_characterise_metrics).
+inline std::int64_t characterise_metric_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
+  return curve_metric_differences(
+      a, b, "study_characterise_metrics",
+      {"settled", "cycles_to_steady", "cycles_run", "measured_cycles", "amplitude_m", "gamma", "apparent_mass_kg",
+       "apparent_mass_spread_kg", "equivalent_damping_N_s_m", "equivalent_damping_spread_N_s_m", "impact_J_per_cycle",
+       "friction_J_per_cycle", "loss_factor", "floor_contact_fraction", "lid_contact_fraction", "particle_mass_kg",
+       "gravity_m_s2", "free_height_m"});
+}
+
 }  // namespace pdamp::test

@@ -47,26 +47,6 @@ std::string error_of(const std::function<void()>& f) {
   return "(no error)";
 }
 
-/// Every stored characterisation metric but the wall time that differs between two stores,
-/// bit for bit (or is missing from the second): the count.
-std::int64_t characterise_metric_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
-  sqlite::Database d(a);
-  d.exec("ATTACH '" + b.string() + "' AS b");
-  std::string differs = "y.point IS NULL";
-  for (const char* column :
-       {"settled", "cycles_to_steady", "cycles_run", "measured_cycles", "amplitude_m", "gamma", "apparent_mass_kg",
-        "apparent_mass_spread_kg", "equivalent_damping_N_s_m", "equivalent_damping_spread_N_s_m", "impact_J_per_cycle",
-        "friction_J_per_cycle", "loss_factor", "floor_contact_fraction", "lid_contact_fraction", "particle_mass_kg",
-        "gravity_m_s2", "free_height_m"}) {
-    differs += std::string(" OR x.") + column + " IS NOT y." + column;
-  }
-  sqlite::Statement q(d, "SELECT coalesce(sum(" + differs +
-                             "), -1) FROM main.study_characterise_metrics x LEFT JOIN b.study_characterise_metrics "
-                             "y USING (point)");
-  q.step();
-  return q.column_int(0);
-}
-
 }  // namespace
 
 TEST_CASE("[characterise] sections: a curve per model and frequency, up the amplitudes, Gamma turned into A") {
@@ -134,7 +114,7 @@ TEST_CASE("[characterise] mistakes: one message naming the line, the key and wha
         }).find("gammas: Gamma = A (2 pi f)^2 / g needs gravity, and the scenario has |g| = 0") != std::string::npos);
 }
 
-TEST_CASE("a bad [characterise] study, --snapshots and study submit exit 2 and write nothing") {
+TEST_CASE("a bad [characterise] study and --snapshots exit 2, a dry submit writes nothing") {
   test::TempDir dir("characterise-bad");
   const auto db = dir / "runs.sqlite";
   const auto file = dir / "c.ini";
@@ -144,7 +124,7 @@ TEST_CASE("a bad [characterise] study, --snapshots and study submit exit 2 and w
   CHECK(one.err.find("amplitudes has 1 value") != std::string::npos);
   CHECK(!std::filesystem::exists(db));
   write_file(file, characterise_study("[characterise]\namplitudes = 0.001, 0.002\nfrequencies = 10, 20\n"));
-  check_sweep_only_options_refused(file, db, dir, "[characterise]");
+  check_curve_study_options(file, db, dir, "[characterise]");
 }
 
 // A bed resting on the floor moves with its container: its force on it is −m_p (z'' + g), so

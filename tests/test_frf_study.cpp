@@ -44,23 +44,6 @@ std::string error_of(const std::function<void()>& f) {
   return "(no error)";
 }
 
-/// Every stored FRF metric but the wall time differs between two stores, bit for bit: the count.
-std::int64_t frf_metric_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
-  sqlite::Database d(a);
-  d.exec("ATTACH '" + b.string() + "' AS b");
-  std::string differs = "y.point IS NULL";
-  for (const char* column :
-       {"settled", "cycles_to_steady", "cycles_run", "amplitude_m", "amplitude_spread_m", "phase_rad",
-        "normalised_amplitude", "gamma", "impact_J_per_cycle", "friction_J_per_cycle", "viscous_J_per_cycle",
-        "loss_factor", "apparent_mass_kg", "equivalent_damping_N_s_m", "particle_mass_kg"}) {
-    differs += std::string(" OR x.") + column + " IS NOT y." + column;
-  }
-  sqlite::Statement q(d, "SELECT coalesce(sum(" + differs +
-                             "), -1) FROM main.study_frf_metrics x LEFT JOIN b.study_frf_metrics y USING (point)");
-  q.step();
-  return q.column_int(0);
-}
-
 /// Beds kept as a point's final state that no completed point refers to.
 std::int64_t orphan_end_states(const std::filesystem::path& db) {
   return count_rows(db,
@@ -155,7 +138,7 @@ TEST_CASE("a bad [frf] study, --snapshots with [frf] and study submit of [frf] e
     CHECK(!std::filesystem::exists(db));
   }
   write_file(file, frf_study("levels = 0.1\nfrequencies = 10\n"));
-  check_sweep_only_options_refused(file, db, dir, "[frf]");
+  check_curve_study_options(file, db, dir, "[frf]");
 }
 
 TEST_CASE("an [frf] host-alone curve gives the closed-form amplitude, phase and loss factor at every point") {

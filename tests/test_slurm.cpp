@@ -3,7 +3,9 @@
 /// once, shared beds, refusals) from tasks run in this process.
 #include <doctest/doctest.h>
 
+#include <atomic>
 #include <fstream>
+#include <functional>
 
 #include "pdamp/slurm/collect.hpp"
 #include "pdamp/slurm/job_script.hpp"
@@ -12,6 +14,7 @@
 #include "pdamp/slurm/slurm.hpp"
 #include "pdamp/store/shard_merge.hpp"
 #include "pdamp/study/study_runner.hpp"
+#include "study_compare.hpp"
 #include "test_process.hpp"
 #include "test_support.hpp"
 
@@ -233,7 +236,7 @@ struct ShardedStudy {
     record = *StudyStore(store).study(id);
     folder = ShardFolder(db, id);
     std::filesystem::create_directories(folder.logs());
-    write_folder_study(folder, record);
+    write_folder_study(folder, store, record);
   }
   /// Runs point `point` as the task of that index of job `job` into its shard, as `pdamp
   /// study task` does (any index may run any point; this one keeps the names readable).
@@ -420,4 +423,119 @@ TEST_CASE("a task writes its shard in scratch space and copies it to the folder 
   in.read(header, sizeof header);
   CHECK((header[18] == 1 && header[19] == 1));
   CHECK(!std::filesystem::exists(s.folder.shard(3, 1).string() + "-wal"));
+}
+
+namespace {
+
+/// A study of two curves of three points each (points 1-3 and 4-6; `sections` on small.ini's
+/// hard model) as Slurm runs it, against the same study run here point by point, as `pdamp
+/// study run`'s workers run them: a task per curve, the second stopped in its first point;
+/// collected; points 2 and 3 made to run again (their runs deleted), so that the first
+/// curve resumes from point 1's final state, which the folder's study then holds; both
+/// curves resubmitted and collected. Every metric that `metric_differences` compares, every
+/// sample and every run are the same bits.
+void check_curves_on_shards(
+    const test::TempDir& dir, const std::string& sections,
+    const std::function<std::int64_t(const std::filesystem::path&, const std::filesystem::path&)>& metric_differences) {
+  const auto file = dir / "curves.ini";
+  test::write_file(file, "[study]\nname = curves\nscenario = " + test::small() + "\nmodels = hard\n\n" + sections);
+  const study::Study study = study::make_study(study::read_study_source(file), false);
+  REQUIRE(study.points.size() == 6);
+  const auto reference = dir / "reference.sqlite";
+  {
+    RunStore store(reference);
+    const std::int64_t id = study::find_or_create_study(store, study);
+    for (int p = 1; p <= 6; ++p) {
+      REQUIRE(study::run_study_point(store, id, study, p, {}).status == PointStatus::completed);
+    }
+  }
+  const auto db = dir / "runs.sqlite";
+  RunStore store(db);
+  StudyStore studies(store);
+  const std::int64_t id = study::find_or_create_study(store, study);
+  const StudyRecord record = *studies.study(id);
+  CHECK(studies.curve_from(id, 1) == std::vector<int>{1, 2, 3});
+  CHECK(studies.curve_from(id, 5) == std::vector<int>{5, 6});
+  CHECK(points_to_submit(studies, id, {}) == std::vector<std::int64_t>{1, 4});
+  const ShardFolder folder(db, id);
+  std::filesystem::create_directories(folder.logs());
+  write_folder_study(folder, store, record);
+  std::vector<int> started;
+  ShardTaskResult curve =
+      run_shard_task({folder, 10, 0, 1, {}}, study::PointRunControl{}, [&](int point) { started.push_back(point); });
+  CHECK(started == std::vector<int>{1, 2, 3});
+  CHECK(curve.points_completed == 3);
+  CHECK(curve.last_point == 3);
+  std::atomic<bool> stop{true};
+  study::PointRunControl stopped;
+  stopped.stop = &stop;
+  curve = run_shard_task({folder, 10, 1, 4, {}}, stopped);
+  CHECK(curve.point.status == PointStatus::interrupted);
+  CHECK(curve.points_completed == 0);
+  CHECK(curve.last_point == 4);
+  CollectReport report = collect_shards(store, record, {folder});
+  REQUIRE(report.merged.size() == 2);
+  CHECK(report.merged[0].points == 3);
+  CHECK(report.merged[0].runs == 3);
+  CHECK(report.merged[0].beds_added == 4);  // the settled bed and three final states
+  CHECK(report.merged[1].points == 1);
+  CHECK(report.merged[1].task.outcome == PointStatus::interrupted);
+  const auto status_of = [&](int point) { return studies.point(id, point)->status; };
+  CHECK(status_of(3) == PointStatus::completed);
+  CHECK(status_of(4) == PointStatus::interrupted);
+  CHECK(status_of(5) == PointStatus::pending);
+  CHECK(test::count_rows(db, "SELECT count(*) FROM study_point_states") == 3);
+
+  std::vector<std::int64_t> runs;
+  {
+    sqlite::Database d(db);
+    sqlite::Statement q(d, "SELECT run_id FROM study_point_runs WHERE point IN (2, 3)");
+    while (q.step()) runs.push_back(q.column_int(0));
+  }
+  REQUIRE(runs.size() == 2);
+  store.delete_runs(runs, false);
+  CHECK(points_to_submit(studies, id, {}) == std::vector<std::int64_t>{2, 4});
+  CHECK(continued_points(studies, id) == std::vector<int>{1});
+  write_folder_study(folder, store, record);
+  CHECK(test::count_rows(folder.template_store(), "SELECT count(*) FROM study_point_states") == 1);
+  CHECK(run_shard_task({folder, 11, 0, 2, {}}, study::PointRunControl{}).points_completed == 2);
+  CHECK(run_shard_task({folder, 11, 1, 4, {}}, study::PointRunControl{}).points_completed == 3);
+  report = collect_shards(store, record, {folder});
+  REQUIRE(report.merged.size() == 2);
+  CHECK(report.merged[0].points == 2);
+  CHECK(report.merged[0].beds_shared == 1);  // point 1's final state, the store's
+  CHECK(report.merged[1].points == 3);
+  CHECK(report.refused.empty());
+  for (int p = 1; p <= 6; ++p) CHECK(status_of(p) == PointStatus::completed);
+  CHECK(metric_differences(reference, db) == 0);
+  CHECK(metric_differences(db, reference) == 0);
+  const auto [differing, compared] = test::sample_differences(reference, db);
+  CHECK(compared > 6 * 10);
+  CHECK(differing == 0);
+  CHECK(test::run_differences(reference, db).first == 0);
+  // Each completed point's final state is its run's, labelled by the store's run id.
+  CHECK(test::count_rows(db,
+                         "SELECT count(*) FROM study_point_states s JOIN initial_states i USING (state_id) "
+                         "WHERE i.settle_key LIKE '% point end: run ' || s.run_id") == 6);
+  const CollectReport again = collect_shards(store, record, {folder});
+  CHECK(again.merged.empty());
+  CHECK(again.already_collected == 4);
+}
+
+}  // namespace
+
+TEST_CASE("an [frf] study on Slurm: a task per curve, a curve resumed from its last completed point, the same bits") {
+  test::TempDir dir("slurm-frf");
+  check_curves_on_shards(dir,
+                         "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.05, 0.2\n"
+                         "frequencies = 15, 17, 19\nmax_cycles = 20\n",
+                         test::frf_metric_differences);
+}
+
+TEST_CASE("a [characterise] study on Slurm: a task per curve up the amplitudes, resumed mid-curve, the same bits") {
+  test::TempDir dir("slurm-characterise");
+  check_curves_on_shards(dir,
+                         "[characterise]\namplitudes = 0.0005, 0.0015, 0.003\nfrequencies = 15, 20\n"
+                         "amplitude_tolerance = 1e-9\nmax_cycles = 20\nmeasured_cycles = 5\n",
+                         test::characterise_metric_differences);
 }

@@ -72,10 +72,13 @@ struct ClusterStudy {
   SlurmReport queue, accounting;
 };
 
-/// The latest task of each point.
-std::map<int, const TaskView*> latest_tasks(const std::vector<TaskView>& tasks) {
+/// The latest task of each point (a curve's task runs its point and the rest of its curve).
+std::map<int, const TaskView*> latest_tasks(StudyStore& studies, std::int64_t study_id,
+                                            const std::vector<TaskView>& tasks) {
   std::map<int, const TaskView*> latest;
-  for (const auto& view : tasks) latest[view.task.point] = &view;  // by job, then task
+  for (const auto& view : tasks) {  // by job, then task
+    for (const int point : studies.curve_from(study_id, view.task.point)) latest[point] = &view;
+  }
   return latest;
 }
 
@@ -86,6 +89,9 @@ std::string point_problem(const StudyPointState& point, const TaskView* view, co
   const std::string log = " (log: " + folder.log(view->task.job_id, view->task.task).string() + ")";
   switch (view->standing) {
     case TaskStanding::collected:
+      if (point.status == PointStatus::pending) {
+        return "not reached by " + task + ", whose curve stopped before it (" + view->task.message + ")" + log;
+      }
       return std::string(to_string(point.status)) + " in " + task + ": " + point.message + log;
     case TaskStanding::waiting:
       return task + " finished; its shard waits to be collected";
@@ -103,7 +109,7 @@ std::string point_problem(const StudyPointState& point, const TaskView* view, co
 /// The points that are not completed, one line each, and how many are.
 int report_points(StudyStore& studies, std::int64_t id, const std::vector<TaskView>& tasks, const ShardFolder& folder,
                   std::ostream& out) {
-  const auto latest = latest_tasks(tasks);
+  const auto latest = latest_tasks(studies, id, tasks);
   int completed = 0;
   for (const auto& p : studies.points(id)) {
     if (p.status == PointStatus::completed) {
@@ -123,7 +129,9 @@ void report_collect(const CollectReport& report, std::ostream& out) {
         << printable(m.task.host)
         << "): " << (m.task.outcome ? std::string(to_string(*m.task.outcome)) : std::string("not ended"));
     if (m.results_added) {
+      if (m.points > 1) out << ", " << m.points << " points";
       out << ", " << m.runs << " runs, " << m.beds_added << " beds added, " << m.beds_shared << " shared";
+      if (!m.not_added.empty()) out << "; " << printable(m.not_added);
     } else {
       out << "; " << printable(m.not_added);
     }
@@ -150,8 +158,10 @@ std::filesystem::path this_executable() { return std::filesystem::read_symlink("
 
 /// What a dry run would submit: the study's id (stored, or the next) and its points to run.
 std::pair<std::int64_t, std::vector<std::int64_t>> planned(const std::string& db, const study::Study& study) {
-  std::vector<std::int64_t> all;
-  for (const auto& p : study.points) all.push_back(p.point);
+  std::vector<std::int64_t> all;  // of a new study: each point, or each curve's first
+  for (const auto& p : study.points) {
+    if (p.previous() == 0) all.push_back(p.point);
+  }
   if (!std::filesystem::exists(db)) return {1, all};
   std::int64_t stored = 0;
   {
@@ -182,8 +192,12 @@ std::string job_line(std::int64_t job, const std::vector<std::int64_t>& points) 
          array_ranges(points) + ")";
 }
 
+/// Whether the study's points run as curves, a task each from its first point to run.
+bool runs_curves(const study::Study& study) {
+  return !study.file.frfs.empty() || !study.file.characterisations.empty();
+}
+
 int dry_run(const std::string& db, const study::Study& study, const SlurmOptions& options) {
-  study::refuse_curve_study(study, "study submit");
   const auto [id, points] = planned(db, study);
   if (points.empty()) {
     std::cerr << "pdamp: dry run: study " << id << " has no point to submit\n";
@@ -191,7 +205,8 @@ int dry_run(const std::string& db, const study::Study& study, const SlurmOptions
   }
   const auto arrays = array_chunks(points, max_array_size());
   for (const auto& chunk : arrays) {
-    std::cout << job_script({id, study.file.name, this_executable(), ShardFolder(db, id), chunk, options});
+    std::cout << job_script(
+        {id, study.file.name, this_executable(), ShardFolder(db, id), chunk, options, runs_curves(study)});
   }
   std::cerr << "pdamp: dry run: " << arrays.size() << " job script" << (arrays.size() == 1 ? "" : "s") << " for "
             << points.size() << " points of study " << id << "; nothing was written or submitted\n";
@@ -202,8 +217,8 @@ int dry_run(const std::string& db, const study::Study& study, const SlurmOptions
 /// the job's line for the user.
 std::string submit_array(OpenStudy& open, const ShardFolder& folder, const std::vector<std::int64_t>& points,
                          const SlurmOptions& options) {
-  const auto script =
-      new_script(folder, job_script({open.id, open.record.name, this_executable(), folder, points, options}));
+  const auto script = new_script(folder, job_script({open.id, open.record.name, this_executable(), folder, points,
+                                                     options, runs_curves(open.study)}));
   std::int64_t job = 0;
   try {
     job = submit(script);
@@ -244,7 +259,7 @@ int submit_points(ClusterStudy& cluster, const SlurmOptions& options) {
   const auto arrays = array_chunks(points, max_array_size());
   const ShardFolder folder = cluster.folder();
   std::filesystem::create_directories(folder.logs());
-  write_folder_study(folder, open.record);
+  write_folder_study(folder, open.store, open.record);
   std::vector<std::string> submitted;
   std::size_t n_submitted = 0;
   for (const auto& chunk : arrays) {
@@ -261,7 +276,8 @@ int submit_points(ClusterStudy& cluster, const SlurmOptions& options) {
     }
   }
   std::cout << "study " << open.id << " '" << printable(open.record.name) << "': " << points.size()
-            << " points submitted as " << arrays.size() << " job array" << (arrays.size() == 1 ? "" : "s") << "\n";
+            << (runs_curves(open.study) ? " curves (each from its first point to run)" : " points") << " submitted as "
+            << arrays.size() << " job array" << (arrays.size() == 1 ? "" : "s") << "\n";
   for (const auto& line : submitted) std::cout << "  " << line << "\n";
   std::cout << "  shard folder   " << printable(folder.path().string()) << "\n"
             << "then: pdamp study status " << open.id << ", pdamp study collect " << open.id << "\n";
@@ -283,15 +299,21 @@ void add_submit_options(Subcommand& command) {
       "dry-run", "print the job script; write and submit nothing");
 }
 
-/// `pdamp study task`'s progress in its log: a line each tenth of the point.
-std::function<void(double, std::string_view)> progress_lines(int point) {
-  return [point, last = -1](double fraction, std::string_view phase) mutable {
+/// `pdamp study task`'s progress in its log: a line each tenth of the point it runs (a
+/// curve's task runs several, one after the other).
+struct ProgressLines {
+  void start(int p) {
+    point = p;
+    last = -1;
+  }
+  void operator()(double fraction, std::string_view phase) {
     const int tenth = static_cast<int>(fraction * 10.0);
     if (tenth == last) return;
     last = tenth;
     std::cout << "pdamp: point " << point << ": " << phase << " " << 10 * tenth << " %" << std::endl;
-  };
-}
+  }
+  int point = 0, last = -1;
+};
 
 }  // namespace
 
@@ -313,14 +335,12 @@ int study_submit(const std::vector<std::string>& args) {
     if (vm.count("dry-run"))
       return dry_run(db, OpenStudy(vm["resume"].as<std::string>(), db, StoreAccess::read).study, options);
     ClusterStudy cluster(vm["resume"].as<std::string>(), db, StoreAccess::modify);
-    study::refuse_curve_study(cluster.open.study, "study submit");
     check_study_files(cluster.open);
     return submit_points(cluster, options);
   }
   // Everything that can be wrong with the study is found before the store is touched.
   study::Study study =
       study::make_study(study::read_study_source(vm["STUDY.ini"].as<std::string>()), vm.count("force") > 0);
-  study::refuse_curve_study(study, "study submit");
   study::validate_study(study);
   if (vm.count("dry-run")) return dry_run(db, study, options);
   if (!find_program("sbatch")) {
@@ -361,7 +381,7 @@ int study_status(const std::vector<std::string>& args) {
   ClusterStudy cluster(command.vm(), "study status", StoreAccess::read);
   OpenStudy& open = cluster.open;
   const auto tasks = cluster.tasks(true);
-  const auto latest = latest_tasks(tasks);
+  const auto latest = latest_tasks(open.studies, open.id, tasks);
   TextTable table({{"point", true}, {"status"}, {"job_task"}, {"slurm"}, {"shard"}, {"message", false, 80}});
   for (const auto& p : open.studies.points(open.id)) {
     const auto it = latest.find(p.point);
@@ -410,9 +430,14 @@ int study_task(const std::vector<std::string>& args) {
   std::cout << "pdamp: task " << request.task << " of job " << request.job << " (point " << request.point << ") on "
             << printable(this_process_lease().host) << ", shard folder " << printable(request.folder.path().string())
             << std::endl;
-  control.progress = progress_lines(static_cast<int>(request.point));
-  const ShardTaskResult result = run_shard_task(request, control);
-  std::cout << "pdamp: point " << request.point << " of study " << result.study_id << " "
+  ProgressLines lines;
+  control.progress = [&lines](double fraction, std::string_view phase) { lines(fraction, phase); };
+  const ShardTaskResult result = run_shard_task(request, control, [&lines](int point) { lines.start(point); });
+  if (result.last_point != request.point) {
+    std::cout << "pdamp: points " << request.point << " to " << result.last_point << " of its curve run, "
+              << result.points_completed << " completed" << std::endl;
+  }
+  std::cout << "pdamp: point " << result.last_point << " of study " << result.study_id << " "
             << to_string(result.point.status) << (result.point.message.empty() ? "" : ": " + result.point.message)
             << "; shard " << printable(result.shard.string()) << std::endl;
   switch (result.point.status) {

@@ -121,15 +121,23 @@ std::vector<std::int64_t> points_to_submit(StudyStore& studies, std::int64_t stu
                                            const std::vector<TaskView>& tasks) {
   std::set<int> busy;
   for (const auto& view : tasks) {
-    if (view.standing == TaskStanding::in_queue || view.standing == TaskStanding::waiting) busy.insert(view.task.point);
+    if (view.standing != TaskStanding::in_queue && view.standing != TaskStanding::waiting) continue;
+    for (const int point : studies.curve_from(study_id, view.task.point)) busy.insert(point);
   }
-  std::vector<std::int64_t> points;
-  for (const auto& p : studies.points(study_id)) {
-    if (p.status != PointStatus::completed && p.status != PointStatus::running && !busy.contains(p.point)) {
-      points.push_back(p.point);
-    }
+  std::set<int> completed;
+  const auto points = studies.points(study_id);
+  for (const auto& p : points) {
+    if (p.status == PointStatus::completed) completed.insert(p.point);
   }
-  return points;
+  const auto previous = studies.previous_points(study_id);
+  std::vector<std::int64_t> starts;
+  for (const auto& p : points) {
+    if (p.status == PointStatus::completed || p.status == PointStatus::running || busy.contains(p.point)) continue;
+    // A point continuing one not completed runs in the task of the curve before it.
+    const auto from = previous.find(p.point);
+    if (from == previous.end() || completed.contains(from->second)) starts.push_back(p.point);
+  }
+  return starts;
 }
 
 }  // namespace pdamp::slurm

@@ -198,7 +198,9 @@ std::string job_script(const JobScriptRequest& r) {
   const std::size_t n_points = rising(r.points).size();
   s << "#!/bin/bash\n"
     << "# pdamp study " << r.study_id << ": " << n_points
-    << " points as a job array, one task per point (task T runs the T-th of --points, from 0).\n"
+    << (r.curves ? " curves as a job array, one task per curve (task T runs the T-th of --points, from 0,\n"
+                   "# then the rest of its curve).\n"
+                 : " points as a job array, one task per point (task T runs the T-th of --points, from 0).\n")
     << "# Written by 'pdamp study submit' (pdamp " << version_string << "), which records the job in the\n"
     << "# study's store. Each task writes its own shard store in " << checked_script_path(r.folder.path()) << ";\n"
     << "# 'pdamp study collect " << r.study_id << "' merges them into the store.\n"

@@ -5,11 +5,13 @@
 
 #include <cerrno>
 #include <cstring>
+#include <set>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/shard_merge.hpp"
 #include "pdamp/store/study_store.hpp"
+#include "pdamp/study/study_runner.hpp"
 
 namespace pdamp::slurm {
 namespace {
@@ -37,35 +39,81 @@ void copy_whole(const std::filesystem::path& from, const std::filesystem::path& 
   if (error) throw RuntimeFailure("cannot copy '" + from.string() + "' to '" + to.string() + "': " + error.message());
 }
 
-/// The task's point in the shard store at `work`: run, and its end recorded.
-study::PointResult run_in_shard(const std::filesystem::path& work, const study::Study& study, const StudyRecord& record,
-                                const ShardTaskRequest& r, const study::PointRunControl& control) {
+/// The task's points in the shard store at `work`: its point and (a curve's task) the rest
+/// of its curve after it, each from the one before, until one does not complete; the
+/// task's end recorded with the last point's status.
+ShardTaskResult run_in_shard(const std::filesystem::path& work, const study::Study& study, const StudyRecord& record,
+                             const ShardTaskRequest& r, const study::PointRunControl& control,
+                             const std::function<void(int point)>& point_started) {
   StoreOptions options;
   options.single_process = true;
   RunStore store(work, StoreAccess::modify, options);
   StudyStore studies(store);
-  const study::StudyPoint& point = study.points.at(static_cast<std::size_t>(r.point - 1));
-  studies.add_points(record.study_id, {{point.point, point.section, point.values, std::nullopt, std::nullopt}});
-  StudyTask task = StudyTask::of(r.job, r.task, point.point);
+  const auto stored = [&](int point) {
+    return study::stored_point(study, study.points.at(static_cast<std::size_t>(point - 1)));
+  };
+  const int first = static_cast<int>(r.point);
+  // The folder's study holds the point if the store had completed it: it is not run again.
+  if (!studies.point(record.study_id, first)) studies.add_points(record.study_id, {stored(first)});
+  std::vector<NewStudyPoint> rest;
+  std::vector<int> points{first};  // the curve from `first`, as the study defines it
+  for (const auto& p : study.points) {
+    if (p.previous() != 0 && p.previous() == points.back()) points.push_back(p.point);
+  }
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    // A point the folder's study holds is a final state copied from the store: the curve
+    // was completed from there on before.
+    if (studies.point(record.study_id, points[i])) {
+      points.resize(i);
+      break;
+    }
+    rest.push_back(stored(points[i]));
+  }
+  studies.add_points(record.study_id, rest);
+  StudyTask task = StudyTask::of(r.job, r.task, first);
   task.host = this_process_lease().host;
   studies.begin_task(record.study_id, task);
-  study::PointResult result = study::run_study_point(store, record.study_id, study, point.point, control);
-  studies.end_task(record.study_id, r.job, r.task, result.status, result.message);
+  ShardTaskResult result{record.study_id, {}, {}, 0, first};
+  for (const int point : points) {
+    result.last_point = point;
+    if (point_started) point_started(point);
+    result.point = study::run_study_point(store, record.study_id, study, point, control);
+    if (result.point.status != PointStatus::completed) break;
+    ++result.points_completed;
+  }
+  studies.end_task(record.study_id, r.job, r.task, result.point.status,
+                   points.size() > 1 && result.point.status != PointStatus::completed
+                       ? "point " + std::to_string(result.last_point) + ": " + result.point.message
+                       : result.point.message);
   store.make_self_contained();
   return result;
 }
 
 }  // namespace
 
-void write_folder_study(const ShardFolder& folder, const StudyRecord& study) {
+std::vector<int> continued_points(StudyStore& studies, std::int64_t study_id) {
+  std::set<int> completed;
+  for (const auto& p : studies.points(study_id)) {
+    if (p.status == PointStatus::completed) completed.insert(p.point);
+  }
+  std::set<int> continued;
+  for (const auto& [point, previous] : studies.previous_points(study_id)) {
+    if (!completed.contains(point) && completed.contains(previous)) continued.insert(previous);
+  }
+  return {continued.begin(), continued.end()};
+}
+
+void write_folder_study(const ShardFolder& folder, RunStore& store, const StudyRecord& study) {
   const std::filesystem::path part = folder.template_store().string() + ".part";
   remove_store(part);
   {
     StoreOptions options;
     options.single_process = true;
-    RunStore store(part, StoreAccess::write, options);
-    StudyStore(store).copy_study(study);
-    store.make_self_contained();
+    RunStore folder_store(part, StoreAccess::write, options);
+    StudyStore(folder_store).copy_study(study);
+    StudyStore studies(store);
+    copy_end_states(store, study.study_id, continued_points(studies, study.study_id), folder_store);
+    folder_store.make_self_contained();
   }
   sync(part);
   std::filesystem::rename(part, folder.template_store());
@@ -86,7 +134,8 @@ StudyRecord folder_study(const ShardFolder& folder) {
   return studies.front();
 }
 
-ShardTaskResult run_shard_task(const ShardTaskRequest& r, const study::PointRunControl& control) {
+ShardTaskResult run_shard_task(const ShardTaskRequest& r, const study::PointRunControl& control,
+                               const std::function<void(int point)>& point_started) {
   const StudyRecord record = folder_study(r.folder);
   const study::Study study = study::stored_study(record);
   if (r.point < 1 || static_cast<std::size_t>(r.point) > study.points.size()) {
@@ -98,7 +147,8 @@ ShardTaskResult run_shard_task(const ShardTaskRequest& r, const study::PointRunC
   if (!r.scratch.empty()) std::filesystem::create_directories(r.scratch);
   remove_store(work);  // a requeued task starts afresh
   copy_whole(r.folder.template_store(), work);
-  ShardTaskResult result{record.study_id, run_in_shard(work, study, record, r, control), final_file};
+  ShardTaskResult result = run_in_shard(work, study, record, r, control, point_started);
+  result.shard = final_file;
   if (work != part) {
     copy_whole(work, part);
     remove_store(work);

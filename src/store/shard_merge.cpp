@@ -4,6 +4,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <vector>
 
 #include "pdamp/errors.hpp"
@@ -16,7 +17,7 @@ namespace {
 constexpr std::array<std::string_view, 6> run_tables{"samples",      "cycles",        "run_statistics",
                                                      "calibrations", "run_snapshots", "run_checkpoints"};
 
-constexpr std::array<std::string_view, 16> merged{"initial_states",
+constexpr std::array<std::string_view, 19> merged{"initial_states",
                                                   "initial_particles",
                                                   "runs",
                                                   "samples",
@@ -30,19 +31,14 @@ constexpr std::array<std::string_view, 16> merged{"initial_states",
                                                   "comparison_energy",
                                                   "study_point_runs",
                                                   "study_point_metrics",
+                                                  "study_frf_metrics",
+                                                  "study_characterise_metrics",
+                                                  "study_point_states",
                                                   "study_points",
                                                   "study_tasks"};
-// The frequency-response and characterisation tables stay empty in shards: `pdamp study
-// submit` refuses [frf] and [characterise] studies.
-constexpr std::array<std::string_view, 9> unmerged{"studies",
-                                                   "study_point_values",
-                                                   "study_jobs",
-                                                   "sqlite_sequence",
-                                                   "study_frf_points",
-                                                   "study_frf_metrics",
-                                                   "study_characterise_points",
-                                                   "study_characterise_metrics",
-                                                   "study_point_states"};
+// The points' places on their curves are the study's definition, which the store holds.
+constexpr std::array<std::string_view, 6> unmerged{
+    "studies", "study_point_values", "study_jobs", "sqlite_sequence", "study_frf_points", "study_characterise_points"};
 
 /// A shard's ids and their new ids in the store.
 using IdMap = std::map<std::int64_t, std::int64_t>;
@@ -56,13 +52,13 @@ std::int64_t integer(sqlite::Database& db, const std::string& sql) {
 }
 
 /// Copies rows of one table from the shard into the store, column for column, bit for bit:
-/// the rows whose `key` column has a value, with the columns in `remap` mapped to the
-/// store's ids. With `own_id`, that column is left for the store to number, and the map
-/// from the shard's ids to the store's is filled.
+/// the rows whose `key` column has a value (and that meet `also`, an SQL condition), with the
+/// columns in `remap` mapped to the store's ids. With `own_id`, that column is left for the
+/// store to number, and the map from the shard's ids to the store's is filled.
 class RowCopier {
  public:
   RowCopier(sqlite::Database& shard, sqlite::Database& store, std::string_view table, std::string_view key,
-            std::map<std::string, const IdMap*> remap, std::string_view own_id = {})
+            std::map<std::string, const IdMap*> remap, std::string_view own_id = {}, std::string_view also = {})
       : store_(&store), table_(table), remap_(std::move(remap)) {
     std::string names, slots;
     sqlite::Statement columns(store, "SELECT name FROM pragma_table_info(?) ORDER BY cid");
@@ -76,10 +72,14 @@ class RowCopier {
     }
     select_ = std::make_unique<sqlite::Statement>(
         shard, "SELECT " + (own_id.empty() ? std::string("NULL") : std::string(own_id)) + ", " + names + " FROM " +
-                   std::string(table) + " WHERE " + std::string(key) + " = ?");
+                   std::string(table) + " WHERE " + std::string(key) + " = ?" +
+                   (also.empty() ? std::string() : " AND " + std::string(also)));
     insert_ = std::make_unique<sqlite::Statement>(
         store, "INSERT INTO " + std::string(table) + " (" + names + ") VALUES (" + slots + ")");
   }
+
+  /// The next copies write `text` into `column` instead of the shard's value.
+  void set(const std::string& column, std::string text) { set_[column] = std::move(text); }
 
   /// Copies the rows whose key is `key_value`; returns how many.
   int copy(std::int64_t key_value, IdMap* own_ids = nullptr) {
@@ -98,6 +98,10 @@ class RowCopier {
  private:
   void bind(int c) {
     const int column = c + 1;  // after the own id
+    if (const auto text = set_.find(columns_[static_cast<std::size_t>(c)]); text != set_.end()) {
+      insert_->bind(c + 1, text->second);
+      return;
+    }
     const auto it = remap_.find(columns_[static_cast<std::size_t>(c)]);
     if (it == remap_.end() || select_->is_null(column)) {
       insert_->bind_column(c + 1, *select_, column);
@@ -114,6 +118,7 @@ class RowCopier {
   sqlite::Database* store_;
   std::string table_;
   std::map<std::string, const IdMap*> remap_;
+  std::map<std::string, std::string> set_;
   std::vector<std::string> columns_;
   std::unique_ptr<sqlite::Statement> select_, insert_;
 };
@@ -213,34 +218,69 @@ class Merger {
         return;
       }
     }
-    const auto ours = StudyStore(*store_).point(study_id_, task.point);
-    const auto theirs = StudyStore(shard_->db()).point(study_id_, task.point);
-    if (!ours || !theirs) {
-      throw InputError("shard " + quoted(shard_->file()) + ": its point " + std::to_string(task.point) +
-                       " is not a point of study " + std::to_string(study_id_) + " in both stores");
-    }
-    const std::string point = "point " + std::to_string(task.point);
-    if (theirs->status == PointStatus::pending || theirs->status == PointStatus::running) {
-      result_->not_added = point + " did not end in its task";
-    } else if (ours->status == PointStatus::completed) {
-      result_->not_added = point + " was completed already; the shard's results for it are not added";
-    } else if (ours->status == PointStatus::running) {
-      result_->not_added = point + " is running in " +
-                           (ours->lease ? "process " + std::to_string(ours->lease->pid) + " on " + ours->lease->host
-                                        : std::string("another process")) +
-                           "; the shard's results for it are not added";
-    } else {
-      add_results(ours->attempt, theirs->attempt);
-      result_->results_added = true;
+    const std::vector<int> points = task_points();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const std::string not_added = merge_point(points[i]);
+      if (not_added.empty()) continue;
+      result_->not_added =
+          not_added + (i + 1 < points.size() ? "; nor the rest of its curve, which continues from it" : "");
+      break;
     }
     record_task();
   }
 
  private:
+  /// The points the task ran: its point, then (a curve's task) each point continuing from
+  /// the one before, up to one that did not run in the task: still pending, or completed
+  /// without runs of its own (a final state the task started from, copied from the store).
+  std::vector<int> task_points() {
+    const int first = result_->task.point;
+    std::vector<int> points;
+    StudyStore shard(shard_->db());
+    sqlite::Statement runs(shard_->db(), "SELECT count(*) FROM study_point_runs WHERE point = ?");
+    for (const int point : shard.curve_from(study_id_, first)) {
+      const auto state = shard.point(study_id_, point);
+      if (!state) break;
+      runs.bind(1, point);
+      runs.step();
+      const bool own_runs = runs.column_int(0) > 0;
+      runs.reset();
+      if (point != first && (state->status == PointStatus::pending || !own_runs)) break;
+      points.push_back(point);
+    }
+    return points;
+  }
+
+  /// Adds the point's results if the store wants them; else returns why not.
+  std::string merge_point(int point_number) {
+    const auto ours = StudyStore(*store_).point(study_id_, point_number);
+    const auto theirs = StudyStore(shard_->db()).point(study_id_, point_number);
+    if (!ours || !theirs) {
+      throw InputError("shard " + quoted(shard_->file()) + ": its point " + std::to_string(point_number) +
+                       " is not a point of study " + std::to_string(study_id_) + " in both stores");
+    }
+    const std::string point = "point " + std::to_string(point_number);
+    if (theirs->status == PointStatus::pending || theirs->status == PointStatus::running) {
+      return point + " did not end in its task";
+    }
+    if (ours->status == PointStatus::completed) {
+      return point + " was completed already; the shard's results for it are not added";
+    }
+    if (ours->status == PointStatus::running) {
+      return point + " is running in " +
+             (ours->lease ? "process " + std::to_string(ours->lease->pid) + " on " + ours->lease->host
+                          : std::string("another process")) +
+             "; the shard's results for it are not added";
+    }
+    add_results(point_number, ours->attempt, theirs->attempt);
+    result_->results_added = true;
+    ++result_->points;
+    return "";
+  }
+
   /// The point's runs (every attempt's), their beds, comparison and metrics, numbered
-  /// after the store's attempts, and the point's status.
-  void add_results(int attempts_before, int shard_attempts) {
-    const int point = result_->task.point;
+  /// after the store's attempts, its final state (a curve's point), and its status.
+  void add_results(int point, int attempts_before, int shard_attempts) {
     IdMap attempts;
     for (int a = 1; a <= shard_attempts; ++a) attempts[a] = attempts_before + a;
     std::vector<std::int64_t> runs;
@@ -275,8 +315,36 @@ class Merger {
     sqlite::Statement stale(*store_, "DELETE FROM study_point_metrics WHERE study_id = ? AND point = ?");
     stale.bind(1, study_id_).bind(2, point).run();
     RowCopier(shard_->db(), *store_, "study_point_metrics", "point", {{"run_id", &runs_}}).copy(point);
-    update_point(attempts_before, comparison_id ? std::optional(comparisons.at(*comparison_id)) : std::nullopt);
-    result_->runs = static_cast<int>(runs.size());
+    for (const std::string_view table : {"study_frf_metrics", "study_characterise_metrics"}) {
+      RowCopier(shard_->db(), *store_, table, "point", {{"run_id", &runs_}}).copy(point);
+    }
+    add_end_state(point);
+    update_point(point, attempts_before, comparison_id ? std::optional(comparisons.at(*comparison_id)) : std::nullopt);
+    result_->runs += static_cast<int>(runs.size());
+  }
+
+  /// A curve's point's final state: its spheres as a new bed, labelled by the store's id of
+  /// the run that ended there (the label names the run, so it differs in the store), which
+  /// the next point's run starts from.
+  void add_end_state(int point) {
+    sqlite::Statement end(shard_->db(),
+                          "SELECT s.state_id, s.run_id, i.settle_key FROM study_point_states s "
+                          "JOIN initial_states i ON i.state_id = s.state_id WHERE s.point = ?");
+    end.bind(1, point);
+    if (!end.step()) return;
+    const std::int64_t state = end.column_int(0), run = end.column_int(1);
+    const std::string label = end.column_text(2), suffix = "run " + std::to_string(run);
+    if (!label.ends_with(suffix)) {
+      throw RuntimeFailure("shard " + quoted(shard_->file()) + ": the final state of point " + std::to_string(point) +
+                           " is labelled '" + label + "', not by its run " + std::to_string(run));
+    }
+    RowCopier state_row(shard_->db(), *store_, "initial_states", "state_id", {}, "state_id");
+    state_row.set("settle_key", label.substr(0, label.size() - suffix.size()) + "run " + std::to_string(runs_.at(run)));
+    state_row.copy(state, &beds_);
+    RowCopier(shard_->db(), *store_, "initial_particles", "state_id", {{"state_id", &beds_}}).copy(state);
+    RowCopier(shard_->db(), *store_, "study_point_states", "point", {{"run_id", &runs_}, {"state_id", &beds_}})
+        .copy(point);
+    ++result_->beds_added;
   }
 
   /// The beds the runs and the comparison started from: the store's bed of the same
@@ -345,10 +413,10 @@ class Merger {
     }
   }
 
-  void update_point(int attempts_before, std::optional<std::int64_t> comparison_id) {
+  void update_point(int point, int attempts_before, std::optional<std::int64_t> comparison_id) {
     sqlite::Statement theirs(shard_->db(),
                              "SELECT status, attempt, message, started_at, ended_at FROM study_points WHERE point = ?");
-    theirs.bind(1, result_->task.point);
+    theirs.bind(1, point);
     theirs.step();
     sqlite::Statement update(*store_,
                              "UPDATE study_points SET status = ?, attempt = ?, message = ?, started_at = ?, "
@@ -356,7 +424,7 @@ class Merger {
                              "WHERE study_id = ? AND point = ?");
     update.bind_column(1, theirs, 0).bind(2, attempts_before + static_cast<int>(theirs.column_int(1)));
     update.bind_column(3, theirs, 2).bind_column(4, theirs, 3).bind_column(5, theirs, 4);
-    update.bind(6, comparison_id).bind(7, study_id_).bind(8, result_->task.point).run();
+    update.bind(6, comparison_id).bind(7, study_id_).bind(8, point).run();
   }
 
   /// The task's row as the shard tells, marked collected.
@@ -397,6 +465,38 @@ StoreFileStudies read_store_studies(const std::filesystem::path& file) {
 
 std::span<const std::string_view> merged_tables() { return merged; }
 std::span<const std::string_view> unmerged_tables() { return unmerged; }
+
+void copy_end_states(RunStore& store, std::int64_t study_id, const std::vector<int>& points, RunStore& target) {
+  sqlite::Database &from = store.database(), &to = target.database();
+  const std::string this_study = "study_id = " + std::to_string(study_id);
+  sqlite::write_transaction(to, [&] {
+    RowCopier point_row(from, to, "study_points", "point", {}, {}, this_study);
+    RowCopier end_row(from, to, "study_point_states", "point", {}, {}, this_study);
+    RowCopier run_row(from, to, "runs", "run_id", {});
+    RowCopier state_row(from, to, "initial_states", "state_id", {});
+    RowCopier particle_rows(from, to, "initial_particles", "state_id", {});
+    sqlite::Statement beds(from,
+                           "SELECT s.run_id, s.state_id, r.initial_state_id FROM study_point_states s "
+                           "JOIN runs r ON r.run_id = s.run_id WHERE s.study_id = ? AND s.point = ?");
+    std::set<std::int64_t> copied;  // beds: a run may start from another point's final state
+    for (const int point : points) {
+      beds.bind(1, study_id).bind(2, point);
+      if (!beds.step()) {
+        throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) +
+                             " has no final state to continue from");
+      }
+      for (const int column : {1, 2}) {
+        if (beds.is_null(column) || !copied.insert(beds.column_int(column)).second) continue;
+        state_row.copy(beds.column_int(column));
+        particle_rows.copy(beds.column_int(column));
+      }
+      run_row.copy(beds.column_int(0));
+      point_row.copy(point);
+      end_row.copy(point);
+      beds.reset();
+    }
+  });
+}
 
 ShardMerge merge_shard(RunStore& store, const StudyRecord& study, const std::filesystem::path& file) {
   Shard shard(file, store.database());

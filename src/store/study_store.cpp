@@ -425,6 +425,14 @@ std::map<int, int> StudyStore::previous_points(std::int64_t study_id) {
   return previous;
 }
 
+std::vector<int> StudyStore::curve_from(std::int64_t study_id, int first) {
+  std::map<int, int> next;
+  for (const auto& [point, previous] : previous_points(study_id)) next[previous] = point;
+  std::vector<int> points{first};
+  for (auto it = next.find(first); it != next.end(); it = next.find(it->second)) points.push_back(it->second);
+  return points;
+}
+
 std::optional<FrfEndState> StudyStore::end_state(std::int64_t study_id, int point) {
   sqlite::Statement q(db(),
                       "SELECT s.run_id, s.state_id, s.t_s, s.host_z_m, s.host_v_m_s FROM study_point_states s "

@@ -335,16 +335,6 @@ const SteadyStateCriterion& point_criterion(const Study& study, const StudyPoint
   return study.file.frfs.at(point.frf->section).criterion;
 }
 
-void refuse_curve_study(const Study& study, const std::string& command) {
-  if (study.file.frfs.empty() && study.file.characterisations.empty()) return;
-  const std::string& section =
-      study.file.frfs.empty() ? study.file.characterisations.front().section : study.file.frfs.front().section;
-  throw InputError(study.source.study_path.string() + ": [" + section + "]: " + command +
-                   " runs [sweep] studies only: the points of a frequency-response or characterisation curve run "
-                   "in order, each from the previous point's final state; run it with 'pdamp study run' (--jobs "
-                   "runs curves side by side)");
-}
-
 std::string describe_curve(const StudyPoint& point) {
   if (const auto& c = point.characterise) {
     return std::string(to_string(c->model)) + (c->empty ? " empty" : "") + " " + c->frequency_hz + " Hz, curve " +

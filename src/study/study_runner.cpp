@@ -335,6 +335,10 @@ std::string join_lines(const std::vector<std::string>& lines) {
 
 }  // namespace
 
+NewStudyPoint stored_point(const Study& study, const StudyPoint& point) {
+  return {point.point, point.section, point.values, frf_row(study, point), characterise_row(point)};
+}
+
 std::int64_t find_or_create_study(RunStore& store, const Study& study) {
   StudyStore studies(store);
   for (int tries = 0;; ++tries) {
@@ -348,9 +352,7 @@ std::int64_t find_or_create_study(RunStore& store, const Study& study) {
       return record->study_id;
     }
     std::vector<NewStudyPoint> points;
-    for (const auto& p : study.points) {
-      points.push_back({p.point, p.section, p.values, frf_row(study, p), characterise_row(p)});
-    }
+    for (const auto& p : study.points) points.push_back(stored_point(study, p));
     try {
       return studies.create_study(
           {study.file.name, std::string(to_string(study.file.models)), study.source.study_path.string(),

@@ -50,7 +50,9 @@ std::vector<TaskView> task_views(StudyStore& studies, std::int64_t study_id, con
                                  const SlurmReport& queue, const SlurmReport& accounting);
 
 /// The points to submit: not completed (nor running in a local `pdamp study run`), and
-/// without a task in the queue or a shard waiting to be collected.
+/// without a task in the queue or a shard waiting to be collected (a curve's task counts
+/// for the rest of its curve). Of a curve, only the first such point, whose task runs the
+/// rest: one continuing the bed or a completed point.
 std::vector<std::int64_t> points_to_submit(StudyStore& studies, std::int64_t study_id,
                                            const std::vector<TaskView>& tasks);
 

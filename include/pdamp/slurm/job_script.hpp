@@ -87,6 +87,7 @@ struct JobScriptRequest {
   ShardFolder folder;
   std::vector<std::int64_t> points;  ///< task T of the array (from 0) runs the T-th of them, in rising order
   SlurmOptions options;
+  bool curves = false;  ///< an [frf] or [characterise] study: a task runs the rest of its point's curve too
 };
 
 /// The job array's script: #SBATCH lines, then the task (`pdamp study task`), which finds

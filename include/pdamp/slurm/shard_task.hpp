@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <vector>
 
 #include "pdamp/slurm/job_script.hpp"
 #include "pdamp/study/point_runner.hpp"
@@ -20,14 +22,23 @@ struct ShardTaskRequest {
 
 struct ShardTaskResult {
   std::int64_t study_id = 0;
-  study::PointResult point;
+  study::PointResult point;     ///< the last point the task ran
   std::filesystem::path shard;  ///< where the finished shard is
+  int points_completed = 0;     ///< a curve's task runs its point and the rest of its curve
+  int last_point = 0;
 };
 
-/// Writes the folder's study (study.sqlite): the study's row alone, as the store holds it,
-/// in one file without a journal beside it. Replaced whole (renamed into place), so that a
-/// task copying it meanwhile gets the old or the new file, both the same study.
-void write_folder_study(const ShardFolder& folder, const StudyRecord& study);
+/// The completed points of a study's curves that a point not completed continues from:
+/// the final states a resubmitted curve starts from.
+std::vector<int> continued_points(StudyStore& studies, std::int64_t study_id);
+
+/// Writes the folder's study (study.sqlite): the study's row as `store` holds it, and the
+/// final states of its continued_points (store/shard_merge.hpp's copy_end_states), in one
+/// file without a journal beside it. Replaced whole (renamed into place), so that a task
+/// copying it meanwhile gets the old or the new file, both the same study; a point
+/// completed stays completed, so the new file holds every final state a task queued
+/// before may need.
+void write_folder_study(const ShardFolder& folder, RunStore& store, const StudyRecord& study);
 
 /// The folder's study (study.sqlite, written by `pdamp study submit`), read without
 /// locks. Throws InputError if it is missing or was written by a pdamp of another schema.
@@ -35,10 +46,15 @@ StudyRecord folder_study(const ShardFolder& folder);
 
 /// Copies the folder's study into a new shard store (in `scratch`, or in the folder as a
 /// .part file), adds the task's point and the task's own row, runs the point
-/// (study::run_study_point), records how the task ended, and renames the finished shard
+/// (study::run_study_point) and, for a point of an [frf] or [characterise] curve, the rest
+/// of its curve after it in order, each from the one before's final state (the first from
+/// the folder's copy of the store's final state, or from the bed), until one does not
+/// complete or the curve ends; records how the task ended, and renames the finished shard
 /// into place in the folder: a shard under its final name is whole. A stop request ends
 /// the point as interrupted, and the shard is still put in place. Throws InputError,
 /// writing nothing, for a folder without its study or a point the study does not have.
-ShardTaskResult run_shard_task(const ShardTaskRequest& request, const study::PointRunControl& control);
+/// `point_started` is told each point before it runs.
+ShardTaskResult run_shard_task(const ShardTaskRequest& request, const study::PointRunControl& control,
+                               const std::function<void(int point)>& point_started = {});
 
 }  // namespace pdamp::slurm

@@ -264,6 +264,7 @@ class RunStore {
   // The store layer's other parts share the connection; no other layer writes SQL.
   friend class StudyStore;
   friend ShardMerge merge_shard(RunStore& store, const StudyRecord& study, const std::filesystem::path& file);
+  friend void copy_end_states(RunStore& store, std::int64_t study_id, const std::vector<int>& points, RunStore& target);
   sqlite::Database& database() { return *db_; }
   void migrate();
   /// Replaces the run's checkpoint (within a transaction).

@@ -193,6 +193,10 @@ class StudyStore {
   /// The point each frequency-response or characterisation point starts from, for those
   /// continuing another.
   std::map<int, int> previous_points(std::int64_t study_id);
+  /// The points a curve's task starting at `first` runs, in order: `first`, then each
+  /// point continuing from the one before, to the curve's end (`first` alone for a point
+  /// no other continues from: a sweep point, or one from the bed).
+  std::vector<int> curve_from(std::int64_t study_id, int first);
   /// The final state of a completed frequency-response or characterisation point.
   std::optional<FrfEndState> end_state(std::int64_t study_id, int point);
 

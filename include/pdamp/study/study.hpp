@@ -112,11 +112,6 @@ void validate_study(const Study& study, const std::optional<SnapshotSettings>& s
 /// key's values (compared as expanded), and the base scenario's resolved keys.
 std::vector<std::string> study_differences(const Study& stored, const Study& now);
 
-/// Throws InputError if the study runs frequency-response or characterisation curves,
-/// which `command` (e.g. Slurm's job arrays, a task per point) does not support: a curve's
-/// points run in order, each from the previous one's final state.
-void refuse_curve_study(const Study& study, const std::string& command);
-
 /// "key = value, key = value" of a point.
 std::string describe_values(const StudyPoint& point);
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "pdamp/store/run_store.hpp"
+#include "pdamp/store/study_store.hpp"
 #include "pdamp/study/study.hpp"
 
 namespace pdamp::study {
@@ -57,6 +58,9 @@ struct StudyRunReport {
   bool stopped = false;
   std::vector<std::string> problems;  ///< one line per point that did not complete
 };
+
+/// A point as the store records it: its values and, on a curve, its place there.
+NewStudyPoint stored_point(const Study& study, const StudyPoint& point);
 
 /// Finds the study of this name in the store, or stores it with its points. Throws
 /// InputError, writing nothing, if a stored study of this name would run other points,

@@ -5,7 +5,10 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <memory>
+#include <set>
+#include <thread>
 #include <vector>
 
 #include "pdamp/errors.hpp"
@@ -313,4 +316,114 @@ TEST_CASE("bad snapshot options exit with code 2, name the value and write nothi
   CHECK_FALSE(std::filesystem::exists(db));
   CHECK_FALSE(std::filesystem::exists(dir / "runs.snapshots"));
   CHECK_FALSE(std::filesystem::exists(dir / "frames"));
+}
+
+namespace {
+
+std::string file_bytes(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// The files of run `a`'s snapshot folder that differ from run `b`'s, or are in one only
+/// (each run's collection named after it); their number of files in `files`.
+int differing_snapshot_files(const std::filesystem::path& directory, std::int64_t a, std::int64_t b, int& files) {
+  const std::string name_a = "run-" + std::to_string(a), name_b = "run-" + std::to_string(b);
+  auto names = [&](const std::string& run) {
+    std::set<std::string> found;
+    for (const auto& entry : std::filesystem::directory_iterator(directory / run)) {
+      const std::string name = entry.path().filename().string();
+      found.insert(name == run + ".pvd" ? std::string("collection") : name);
+    }
+    return found;
+  };
+  const std::set<std::string> of_a = names(name_a), of_b = names(name_b);
+  files = static_cast<int>(of_a.size());
+  int differing = of_a == of_b ? 0 : 1;
+  for (const std::string& name : of_a) {
+    if (!of_b.count(name)) continue;
+    const auto in = [&](const std::string& run) {
+      return directory / run / (name == "collection" ? run + ".pvd" : name);
+    };
+    if (file_bytes(in(name_a)) != file_bytes(in(name_b))) {
+      MESSAGE(name << " differs");
+      ++differing;
+    }
+  }
+  return differing;
+}
+
+}  // namespace
+
+TEST_CASE("pdamp resume continues a killed run's snapshots: the same files, byte for byte, as the run never stopped") {
+  for (const std::string model : {"soft", "hard"}) {
+    CAPTURE(model);
+    test::TempDir dir("snapshots-resume-" + model);
+    const auto db = dir / "runs.sqlite", frames = dir / "frames";
+    const std::string duration = model == "soft" ? "0.5" : "1.5";  // about a second of wall time each
+    auto run_args = [&](const std::string& every) {
+      return std::vector<std::string>{"run",
+                                      "--scenario",
+                                      test::scenario_file("small").string(),
+                                      "--model",
+                                      model,
+                                      "--duration",
+                                      duration,
+                                      "--db",
+                                      db.string(),
+                                      "--snapshots",
+                                      "0.01",
+                                      "--snapshot-dir",
+                                      frames.string(),
+                                      "--checkpoint-every",
+                                      every};
+    };
+    REQUIRE(test::pdamp_cli(run_args("60"), dir).code == 0);  // run 1, uninterrupted
+    // Run 2 killed some 0.1 s after its first checkpoint, 0.3 s of wall time in: it has
+    // written frames after the checkpoint, which the resumed run writes again.
+    test::Process killed(run_args("0.3"), dir);
+    RunStore store(db, StoreAccess::read);
+    for (int i = 0; i < 6000 && !store.checkpoint(2); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    killed.signal(SIGKILL);
+    killed.wait();
+    REQUIRE(store.summary(2)->status == "dead");
+    const double checkpoint_s = store.checkpoint(2)->checkpoint.t_s;
+    const std::int64_t frames_before_kill =
+        std::distance(std::filesystem::directory_iterator(frames / "run-2"), std::filesystem::directory_iterator()) / 2;
+    INFO("killed at its checkpoint at " << checkpoint_s << " s with " << frames_before_kill << " frames written");
+    CHECK(static_cast<double>(frames_before_kill - 1) * 0.01 > checkpoint_s);
+
+    const test::Result refused = test::pdamp_cli({"resume", "2", "--db", db.string(), "--snapshots", "0.02"}, dir);
+    CHECK(refused.code == 2);
+    CHECK(refused.err.find("pdamp resume takes no --snapshots: a resumed run continues the snapshots it was started "
+                           "with") != std::string::npos);
+    const test::Result resumed = test::pdamp_cli({"resume", "2", "--db", db.string()}, dir);
+    INFO(resumed.err);
+    REQUIRE(resumed.code == 0);
+    int files = 0;
+    CHECK(differing_snapshot_files(frames, 1, 2, files) == 0);
+    const int expected_frames = model == "soft" ? 51 : 151;
+    CHECK(files == 2 * expected_frames + 1);
+    CHECK(test::count_rows(db, "SELECT frames FROM run_snapshots WHERE run_id = 2") == expected_frames);
+    const Result checked = check_with_vtk(frames / "run-2" / "run-2.pvd", {"--db", db.string(), "--run", "2"}, dir);
+    INFO(checked.err);
+    CHECK(checked.code == 0);
+    CHECK(checked.out.find(std::to_string(expected_frames) + " frames") != std::string::npos);
+
+    // A frame before the checkpoint gone, or the folder: refused, nothing changed.
+    const auto first = frames / "run-2" / "cavity_000000.vtp";
+    std::filesystem::rename(first, dir / "moved.vtp");
+    const test::Result missing = test::pdamp_cli({"resume", "2", "--until", "2", "--db", db.string()}, dir);
+    CHECK(missing.code == 2);
+    CHECK(missing.err.find("run 2's snapshots (every 0.01 s in '" + (frames / "run-2").string() +
+                           "') cannot be continued: '" + first.string() +
+                           "', a frame before its checkpoint, is gone") != std::string::npos);
+    std::filesystem::rename(frames / "run-2", dir / "moved");
+    const test::Result gone = test::pdamp_cli({"resume", "2", "--until", "2", "--db", db.string()}, dir);
+    CHECK(gone.code == 2);
+    CHECK(gone.err.find("cannot be continued: the folder is gone") != std::string::npos);
+    CHECK(store.summary(2)->status == "completed");
+    CHECK(store.summary(2)->duration_s == std::stod(duration));
+  }
 }

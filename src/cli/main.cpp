@@ -34,7 +34,8 @@ constexpr const char* usage =
     "          [--snapshots EVERY_S [--snapshot-dir DIR]]\n"
     "          simulate a scenario and store the run (and snapshots for ParaView)\n"
     "  resume  RUN_ID [--until T] [--db FILE]\n"
-    "          continue an interrupted or killed run from its checkpoint (or extend a completed one to T)\n"
+    "          continue an interrupted or killed run from its checkpoint (or extend a completed one to T),\n"
+    "          with its snapshots if it takes any\n"
     "  runs    [--db FILE]            list the stored runs\n"
     "  show    RUN_ID [--db FILE]     summary of one run\n"
     "  delete  RUN_ID... [--db FILE] [--force]\n"
@@ -161,10 +162,19 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
                                      "threads for the soft engine (default: one per core); the same bits for any");
     po::positional_options_description positional;
     positional.add("run-id", 1);
-    const po::variables_map vm = parse_options(args, options, positional).vm;
+    po::options_description accepted;  // the snapshot options only to refuse them with the reason
+    accepted.add(options).add(snapshot_options());
+    const po::variables_map vm = parse_options(args, accepted, positional).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
+    }
+    if (vm.count("snapshots") || vm.count("snapshot-dir")) {
+      throw InputError(std::string("pdamp resume takes no --") +
+                       (vm.count("snapshots") ? "snapshots" : "snapshot-dir") +
+                       ": a resumed run continues the snapshots it was started with, at their interval and in their "
+                       "folder (where the frames up to its checkpoint are, which its .pvd lists), and a run started "
+                       "without takes none (docs/checkpoints.md)");
     }
     const std::string run_id = required_option(vm, "run-id", command);
     const std::optional<double> until =

@@ -19,7 +19,7 @@ double observation_interval_s(const Scenario& scenario) {
 ObservationGrid observation_grid(const Scenario& scenario) {
   const double sample_interval = scenario.run.sample_interval_s;
   const auto steps = static_cast<long>(std::ceil(sample_interval / observation_interval_s(scenario) - 1e-9));
-  return {steps, sample_interval / static_cast<double>(steps)};
+  return {steps, sample_interval / static_cast<double>(steps), sample_interval};
 }
 
 }  // namespace pdamp

@@ -46,8 +46,8 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
   RunOutcome outcome;
   double wall_before_s = 0.0;  // of the processes that ran it before this one
   const double duration = scenario.run.duration_s;
-  const double sample_interval = scenario.run.sample_interval_s;
-  const auto [observations_per_sample, h] = observation_grid(scenario);
+  const ObservationGrid grid = observation_grid(scenario);
+  const std::int64_t observations_per_sample = grid.steps_per_sample;
 
   auto interrupted = [&] {
     outcome.status = RunStatus::interrupted;
@@ -93,9 +93,7 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
     }
     for (std::int64_t k = k0; now.t_s < duration; ++k) {
       for (std::int64_t j = k == k0 ? j0 + 1 : 1; j <= observations_per_sample && now.t_s < duration; ++j) {
-        const double t = j == observations_per_sample
-                             ? static_cast<double>(k + 1) * sample_interval
-                             : static_cast<double>(k) * sample_interval + static_cast<double>(j) * h;
+        const double t = grid.time_s(k * observations_per_sample + j);
         const double target = std::min(t, duration);
         if (checkpoints && target < t) last_checkpoint = checkpoint(k, j - 1);
         engine.advance_to(target);
@@ -103,7 +101,7 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
         require_finite(now);
         record(j == observations_per_sample || target == duration);
         if (control.at_observation) {
-          control.at_observation(engine, {k * observations_per_sample + j, t - target <= 1e-9 * h});
+          control.at_observation(engine, {k * observations_per_sample + j, t - target <= 1e-9 * grid.step_s});
         }
         const bool stop = control.stop && control.stop->load();
         if (checkpoints && target == t && (stop || now.t_s >= duration || clock::now() >= next_checkpoint)) {

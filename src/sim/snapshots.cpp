@@ -131,11 +131,69 @@ SnapshotFiles snapshot_files(const SnapshotSettings& settings, std::int64_t run_
   return {folder, folder / (run + ".pvd")};
 }
 
+void check_resumable_snapshots(const SnapshotFiles& files, double interval_s, const Scenario& scenario,
+                               std::int64_t run_id, std::int64_t checkpoint_step) {
+  const std::string whose = "run " + std::to_string(run_id) + "'s snapshots (every " + describe(interval_s) +
+                            " s in '" + files.folder.string() + "')";
+  try {
+    check_snapshot_settings({interval_s, files.folder.parent_path()}, scenario);
+  } catch (const InputError& e) {
+    throw InputError(whose + ": " + e.what());
+  }
+  std::error_code ec;
+  if (!std::filesystem::is_directory(files.folder, ec)) {
+    throw InputError(whose +
+                     " cannot be continued: the folder is gone; a resumed run continues its snapshots where "
+                     "they are (docs/checkpoints.md)");
+  }
+  const std::int64_t kept = checkpoint_step / steps_per_frame(interval_s, scenario) + 1;
+  for (std::int64_t frame = 0; frame < kept; ++frame) {
+    for (const char* what : {"spheres", "cavity"}) {
+      const std::filesystem::path file = files.folder / frame_file(what, frame);
+      if (!std::filesystem::is_regular_file(file, ec)) {
+        throw InputError(whose + " cannot be continued: '" + file.string() +
+                         "', a frame before its checkpoint, is gone");
+      }
+    }
+  }
+}
+
 SnapshotWriter::SnapshotWriter(const SnapshotSettings& settings, const Scenario& scenario, std::int64_t run_id)
     : files_(prepared(snapshot_files(settings, run_id))),
       cavity_(scenario.cavity),
+      grid_(observation_grid(scenario)),
       steps_per_frame_(steps_per_frame(settings.interval_s, scenario)),
       collection_(files_.collection) {}
+
+SnapshotWriter::SnapshotWriter(const SnapshotFiles& files, double interval_s, const Scenario& scenario,
+                               std::int64_t checkpoint_step)
+    : files_(files),
+      cavity_(scenario.cavity),
+      grid_(observation_grid(scenario)),
+      steps_per_frame_(steps_per_frame(interval_s, scenario)),
+      collection_(files_.collection, trim_to(checkpoint_step / steps_per_frame_ + 1)),
+      frames_(checkpoint_step / steps_per_frame_ + 1) {}
+
+std::vector<vtk::Collection::DataSet> SnapshotWriter::trim_to(std::int64_t kept) const {
+  // Frames are written in order, spheres first: those after the checkpoint run on from it.
+  for (std::int64_t frame = kept;; ++frame) {
+    bool any = false;
+    for (const char* what : {"spheres", "cavity"}) {
+      const std::filesystem::path file = files_.folder / frame_file(what, frame);
+      std::error_code ec;
+      any = std::filesystem::remove(file, ec) || any;
+      if (ec) throw RuntimeFailure("snapshot file '" + file.string() + "' cannot be removed: " + ec.message());
+    }
+    if (!any) break;
+  }
+  std::vector<vtk::Collection::DataSet> data_sets;
+  for (std::int64_t frame = 0; frame < kept; ++frame) {
+    const double t_s = grid_.time_s(frame * steps_per_frame_);
+    data_sets.push_back({t_s, 0, frame_file("spheres", frame)});
+    data_sets.push_back({t_s, 1, frame_file("cavity", frame)});
+  }
+  return data_sets;
+}
 
 void SnapshotWriter::at_observation(const Engine& engine, const ObservationStep& step) {
   if (step.on_grid && step.index % steps_per_frame_ == 0) write_frame(engine, step.index / steps_per_frame_);
@@ -146,8 +204,8 @@ void SnapshotWriter::write_frame(const Engine& engine, std::int64_t frame) {
   const std::string spheres = frame_file("spheres", frame), cavity = frame_file("cavity", frame);
   vtk::write_poly_data(files_.folder / spheres, spheres_poly_data(state, engine.dissipation_by_sphere()));
   vtk::write_poly_data(files_.folder / cavity, cavity_poly_data(cavity_, state.observation));
-  collection_.add(state.observation.t_s, 0, spheres);
-  collection_.add(state.observation.t_s, 1, cavity);
+  collection_.add({state.observation.t_s, 0, spheres});
+  collection_.add({state.observation.t_s, 1, cavity});
   ++frames_;
 }
 

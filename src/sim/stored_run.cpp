@@ -39,6 +39,18 @@ std::optional<SnapshotWriter> start_snapshots(RunStore& store, std::int64_t run_
   return writer;
 }
 
+/// `control` with the run's frames written at each observation, after control's own.
+RunControl with_snapshots(const RunControl& control, std::optional<SnapshotWriter>& snapshots) {
+  RunControl with = control;
+  if (snapshots) {
+    with.at_observation = [&control, &snapshots](const Engine& e, const ObservationStep& step) {
+      if (control.at_observation) control.at_observation(e, step);
+      snapshots->at_observation(e, step);
+    };
+  }
+  return with;
+}
+
 void store_engine_statistics(RunStore& store, std::int64_t run_id, const Engine& engine) {
   EngineStatistics statistics = engine.statistics();
   statistics.emplace_back("threads", omp_get_max_threads());
@@ -98,15 +110,9 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
   if (engine) {
     {
       RunWriter writer(store, result.run_id);
-      RunControl with_snapshots = control;
-      if (snapshots) {
-        with_snapshots.at_observation = [&](const Engine& e, const ObservationStep& step) {
-          if (control.at_observation) control.at_observation(e, step);
-          snapshots->at_observation(e, step);
-        };
-      }
-      result.outcome = plan.body ? plan.body(*engine, scenario, writer, with_snapshots)
-                                 : run_simulation(*engine, scenario, writer, with_snapshots);
+      const RunControl run_control = with_snapshots(control, snapshots);
+      result.outcome = plan.body ? plan.body(*engine, scenario, writer, run_control)
+                                 : run_simulation(*engine, scenario, writer, run_control);
     }
     store_engine_results(store, result.run_id, *engine, result.outcome, warn);
   } else {
@@ -131,15 +137,29 @@ StoredRun resume_and_store(RunStore& store, std::int64_t run_id, std::optional<d
   CheckpointReader checkpoint(run.checkpoint.state);
   const RunLoopState loop = read_run_loop_state(checkpoint);
   const auto engine = restore_engine(setup, scenario, bed, checkpoint);
+  // The run's snapshots go on in their folder from the checkpoint's observation.
+  const std::optional<SnapshotRecord> recorded = store.snapshots(run_id);
+  const SnapshotFiles files = recorded ? SnapshotFiles{recorded->folder, recorded->collection} : SnapshotFiles{};
+  const std::int64_t checkpoint_step = loop.interval * observation_grid(scenario).steps_per_sample + loop.step;
+  if (recorded) check_resumable_snapshots(files, recorded->interval_s, scenario, run_id, checkpoint_step);
   store.claim_for_resume(run, scenario.run.duration_s, scenario.canonical_text);
-  if (store.snapshots(run_id) && warn)
-    warn("a resumed run writes no snapshots: run " + std::to_string(run_id) + "'s stop where it was stopped");
   StoredRun result{run_id, {}};
-  {
+  std::optional<SnapshotWriter> snapshots;
+  try {
+    if (recorded) snapshots.emplace(files, recorded->interval_s, scenario, checkpoint_step);
+  } catch (const std::exception& e) {
+    result.outcome = loop.outcome;
+    result.outcome.status = RunStatus::failed;
+    result.outcome.message = e.what();
+  }
+  if (!recorded || snapshots) {
     RunWriter writer(store, run_id);
-    result.outcome = run_simulation(*engine, scenario, writer, control, &loop);
+    result.outcome = run_simulation(*engine, scenario, writer, with_snapshots(control, snapshots), &loop);
   }
   store_engine_results(store, run_id, *engine, result.outcome, warn);
+  if (snapshots)
+    store.save_snapshots(run_id,
+                         {files.folder.string(), files.collection.string(), recorded->interval_s, snapshots->frames()});
   store.finish_run(run_id, result.outcome);
   return result;
 }

@@ -111,6 +111,11 @@ class AppendedData {
 
 constexpr const char* collection_end = "  </Collection>\n</VTKFile>\n";
 
+std::string entry(const Collection::DataSet& d) {
+  return "    <DataSet timestep=\"" + exact(d.time_s) + "\" part=\"" + std::to_string(d.part) + "\" file=\"" +
+         d.relative_file + "\"/>\n";
+}
+
 }  // namespace
 
 void write_poly_data(const std::filesystem::path& file, const PolyData& data) {
@@ -143,19 +148,20 @@ void write_poly_data(const std::filesystem::path& file, const PolyData& data) {
   out.close();
 }
 
-Collection::Collection(std::filesystem::path file) : file_(std::move(file)) {
+Collection::Collection(std::filesystem::path file, const std::vector<DataSet>& data_sets) : file_(std::move(file)) {
+  std::string text = std::string("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" ") +
+                     "byte_order=\"LittleEndian\">\n  <Collection>\n";
+  for (const DataSet& d : data_sets) text += entry(d);
   OutputFile out(file_, "wb");
-  out.write(std::string("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" ") +
-            "byte_order=\"LittleEndian\">\n  <Collection>\n" + collection_end);
+  out.write(text + collection_end);
   out.close();
 }
 
-void Collection::add(double time_s, int part, const std::string& relative_file) {
+void Collection::add(const DataSet& data_set) {
   // Over the closing tags, which follow again: the file stays complete.
   OutputFile out(file_, "r+b");
   out.seek_from_end(-static_cast<long>(std::strlen(collection_end)));
-  out.write("    <DataSet timestep=\"" + exact(time_s) + "\" part=\"" + std::to_string(part) + "\" file=\"" +
-            relative_file + "\"/>\n" + collection_end);
+  out.write(entry(data_set) + collection_end);
   out.close();
 }
 

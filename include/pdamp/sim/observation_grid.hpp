@@ -26,6 +26,13 @@ double observation_interval_s(const Scenario& scenario);
 struct ObservationGrid {
   long steps_per_sample;
   double step_s;
+  double sample_interval_s;
+  /// The time of observation step `index` (s), as the run loop advances the engine to it:
+  /// the engines stop exactly there.
+  double time_s(std::int64_t index) const {
+    return static_cast<double>(index / steps_per_sample) * sample_interval_s +
+           static_cast<double>(index % steps_per_sample) * step_s;
+  }
 };
 ObservationGrid observation_grid(const Scenario& scenario);
 

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/engine.hpp"
@@ -51,12 +52,27 @@ struct SnapshotFiles {
 };
 SnapshotFiles snapshot_files(const SnapshotSettings& settings, std::int64_t run_id);
 
+/// Checks, before a run resumed from its checkpoint at observation step `checkpoint_step`
+/// is taken over, that it can continue its snapshots (every `interval_s` in `files`): the
+/// folder holds every frame up to the checkpoint, and the frames fit its (possibly
+/// extended) duration. Throws InputError naming run `run_id`, the file and why.
+void check_resumable_snapshots(const SnapshotFiles& files, double interval_s, const Scenario& scenario,
+                               std::int64_t run_id, std::int64_t checkpoint_step);
+
 /// Writes one run's frames at the run loop's observations (RunControl::at_observation).
+/// Frame k is taken at observation step k × steps per frame, at that step's time.
 class SnapshotWriter {
  public:
   /// Creates the run's folder and an empty collection. Throws RuntimeFailure if the
   /// folder cannot be made or already holds files (of a run of another store).
   SnapshotWriter(const SnapshotSettings& settings, const Scenario& scenario, std::int64_t run_id);
+
+  /// Continues the snapshots of a run resumed from its checkpoint at observation step
+  /// `checkpoint_step` (checked by check_resumable_snapshots): keeps the frames up to the
+  /// checkpoint, removes the later ones (the stopped process wrote them after it; they are
+  /// written again, the same bytes) and lists the kept ones in a new collection. Throws
+  /// RuntimeFailure naming a file that cannot be removed or written.
+  SnapshotWriter(const SnapshotFiles& files, double interval_s, const Scenario& scenario, std::int64_t checkpoint_step);
 
   /// Writes a frame if this observation is at a multiple of the interval. Throws
   /// RuntimeFailure naming the file that cannot be written.
@@ -67,9 +83,12 @@ class SnapshotWriter {
 
  private:
   void write_frame(const Engine& engine, std::int64_t frame);
+  /// Removes the frames from `kept` on; the data sets of those before.
+  std::vector<vtk::Collection::DataSet> trim_to(std::int64_t kept) const;
 
   SnapshotFiles files_;
   Cavity cavity_;
+  ObservationGrid grid_;
   std::int64_t steps_per_frame_;
   vtk::Collection collection_;
   std::int64_t frames_ = 0;

@@ -43,11 +43,17 @@ void write_poly_data(const std::filesystem::path& file, const PolyData& data);
 /// halfway leaves a collection of the frames it wrote.
 class Collection {
  public:
-  /// Creates `file` (replacing it) with no data sets.
-  explicit Collection(std::filesystem::path file);
+  /// A data set of part `part` at time `time_s`.
+  struct DataSet {
+    double time_s;
+    int part;
+    std::string relative_file;
+  };
 
-  /// Adds a data set of part `part` at time `time_s`.
-  void add(double time_s, int part, const std::string& relative_file);
+  /// Creates `file` (replacing it) listing `data_sets` (a resumed run's frames so far).
+  explicit Collection(std::filesystem::path file, const std::vector<DataSet>& data_sets = {});
+
+  void add(const DataSet& data_set);
 
   const std::filesystem::path& file() const { return file_; }
 

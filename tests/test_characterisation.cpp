@@ -284,8 +284,16 @@ TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SI
   CHECK(compared > 9 * 15);
   CHECK(differing == 0);
 
+  // Killed once a point has a checkpoint, which then says it is of another pdamp: the point
+  // is run from its start, and says so.
   const auto killed = dir / "killed.sqlite";
-  kill_study_mid_run(file, killed, dir, "study_characterisation", 2);
+  kill_study_when(file, killed, dir, "study_characterisation",
+                  "SELECT (SELECT count(*) >= 2 FROM study_points WHERE status = 'completed') AND (" +
+                      std::string(checkpointed_unfinished_runs) + ") > 0",
+                  {"--checkpoint-every", "0.01"});
+  const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
+  REQUIRE(checkpointed != "()");
+  sqlite::Database(killed).exec("UPDATE run_checkpoints SET pdamp_version = '0.0.1' WHERE run_id IN " + checkpointed);
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 9);
   // A point's metrics, final state and completion are one transaction: none without the others.
   CHECK(count_rows(killed,
@@ -303,6 +311,9 @@ TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SI
   const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
+  CHECK(resumed.err.find("of an earlier attempt is run again from its start: run ") != std::string::npos);
+  CHECK(resumed.err.find("'s checkpoint was written by pdamp 0.0.1") != std::string::npos);
+  CHECK(runs_continued_by_their_points(killed, checkpointed) == 0);
   CHECK(characterise_metric_differences(stores.at(1), killed) == 0);
   CHECK(sample_differences(stores.at(1), killed).first == 0);
 

@@ -361,14 +361,23 @@ TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKIL
   CHECK(compared > 15 * 10);
   CHECK(differing == 0);
 
-  // Killed with its workers once the first curve is under way: resumed, the same bits.
+  // Killed with its workers once the first curve is under way and a point has a checkpoint:
+  // resumed, that point goes on from it, and the same bits.
   const auto killed = dir / "killed.sqlite";
-  kill_study_mid_run(file, killed, dir, "study_frf", 3);
+  kill_study_when(file, killed, dir, "study_frf",
+                  "SELECT (SELECT count(*) >= 3 FROM study_points WHERE status = 'completed') AND (" +
+                      std::string(checkpointed_unfinished_runs) + ") > 0",
+                  {"--checkpoint-every", "0.01"});
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 15);
   CHECK(orphan_end_states(killed) == 0);
+  const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
   const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
+  INFO("runs with a checkpoint before the resume: " << checkpointed);
+  CHECK(checkpointed != "()");
+  CHECK(runs_continued_by_their_points(killed, checkpointed) ==
+        count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
   CHECK(frf_metric_differences(stores.at(1), killed) == 0);
   CHECK(sample_differences(stores.at(1), killed).first == 0);
   CHECK(orphan_end_states(killed) == 0);

@@ -149,20 +149,52 @@ inline std::map<int, std::filesystem::path> run_study_per_jobs(const std::filesy
   return stores;
 }
 
-/// `pdamp study run FILE --jobs 2` into `store`, killed with its workers by SIGKILL once the
-/// store has the view `view` and at least `completed` points completed (or after 30 s).
-inline void kill_study_mid_run(const std::filesystem::path& file, const std::filesystem::path& store,
-                               const TempDir& dir, const std::string& view, int completed) {
-  Process study({"study", "run", file.string(), "--db", store.string(), "--jobs", "2"}, dir, "study", Group::own);
-  for (int i = 0;
-       i < 3000 && !(std::filesystem::exists(store) &&
-                     count_rows(store, "SELECT count(*) FROM sqlite_schema WHERE name = '" + view + "'") &&
-                     count_rows(store, "SELECT count(*) FROM study_points WHERE status = 'completed'") >= completed);
+/// `pdamp study run FILE --jobs 2 [extra...]` into `store`, killed with its workers by
+/// SIGKILL once the store has the view `view` and the count `ready_sql` is not 0 (or after 30 s).
+inline void kill_study_when(const std::filesystem::path& file, const std::filesystem::path& store, const TempDir& dir,
+                            const std::string& view, const std::string& ready_sql,
+                            const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> args{"study", "run", file.string(), "--db", store.string(), "--jobs", "2"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  Process study(args, dir, "study", Group::own);
+  for (int i = 0; i < 3000 && !(std::filesystem::exists(store) &&
+                                count_rows(store, "SELECT count(*) FROM sqlite_schema WHERE name = '" + view + "'") &&
+                                count_rows(store, ready_sql));
        ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
   study.signal_group(SIGKILL);
   CHECK(study.wait() == 128 + SIGKILL);
+}
+
+/// kill_study_when at least `completed` points are completed.
+inline void kill_study_mid_run(const std::filesystem::path& file, const std::filesystem::path& store,
+                               const TempDir& dir, const std::string& view, int completed) {
+  kill_study_when(file, store, dir, view,
+                  "SELECT count(*) >= " + std::to_string(completed) + " FROM study_points WHERE status = 'completed'");
+}
+
+/// Counts the runs that are not completed but have a checkpoint: a point left so continues them.
+inline constexpr const char* checkpointed_unfinished_runs =
+    "SELECT count(*) FROM run_checkpoints JOIN runs USING (run_id) WHERE status <> 'completed'";
+
+/// The ids of the runs of `db` that are not completed but have a checkpoint, as an SQL
+/// list, e.g. "(3, 7)".
+inline std::string unfinished_checkpointed_run_ids(const std::filesystem::path& db) {
+  sqlite::Database d(db);
+  sqlite::Statement q(d, "SELECT run_id FROM run_checkpoints JOIN runs USING (run_id) WHERE status <> 'completed'");
+  std::string list;
+  while (q.step()) list += (list.empty() ? "" : ", ") + std::to_string(q.column_int(0));
+  return "(" + list + ")";
+}
+
+/// How many of the runs `ids` (an SQL list) are completed and linked to their point's
+/// latest attempt, which then completed: each such run was continued by its point.
+inline std::int64_t runs_continued_by_their_points(const std::filesystem::path& db, const std::string& ids) {
+  return count_rows(db,
+                    "SELECT count(*) FROM runs r JOIN study_point_runs l USING (run_id) JOIN study_points p ON "
+                    "p.study_id = l.study_id AND p.point = l.point AND p.attempt = l.attempt WHERE r.run_id IN " +
+                        ids + " AND r.status = 'completed' AND p.status = 'completed'");
 }
 
 /// A study kind other than [sweep] (`section`, e.g. "[frf]") refused with exit 2 by

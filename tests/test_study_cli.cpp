@@ -215,12 +215,13 @@ constexpr const char* mid_run =
 
 }  // namespace
 
-TEST_CASE("a study killed mid-run loses only its points in progress and resumes to the same bits") {
+TEST_CASE("a study killed mid-run continues its points in progress from their checkpoints, to the same bits") {
   test::TempDir dir("study-kill");
   const auto file = six_points(dir);
   const auto reference = dir / "reference.sqlite", killed = dir / "killed.sqlite";
   REQUIRE(pdamp_cli({"study", "run", file.string(), "--db", reference.string(), "--jobs", "2"}, dir).code == 0);
-  const std::vector<std::string> run{"study", "run", file.string(), "--db", killed.string(), "--jobs", "2"};
+  const std::vector<std::string> run{"study",  "run", file.string(),        "--db", killed.string(),
+                                     "--jobs", "2",   "--checkpoint-every", "0.05"};
 
   // SIGKILL of the study process alone: its workers stop and store their points as interrupted.
   {
@@ -234,11 +235,12 @@ TEST_CASE("a study killed mid-run loses only its points in progress and resumes 
                      "AND message LIKE '%stopped by a signal%'") >= 1);
     study.signal_group(SIGKILL);  // nothing should be left of it
   }
-  // SIGKILL of the study and its workers: their points stay 'running' under leases whose
-  // processes are gone.
+  // SIGKILL of the study and its workers once a point's run has a checkpoint: their points
+  // stay 'running' under leases whose processes are gone.
   {
-    Process study({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir, "resume", Group::own);
-    REQUIRE(wait_until(killed, mid_run));
+    Process study({"study", "resume", "1", "--db", killed.string(), "--jobs", "2", "--checkpoint-every", "0.05"}, dir,
+                  "resume", Group::own);
+    REQUIRE(wait_until(killed, std::string(mid_run) + " AND (" + test::checkpointed_unfinished_runs + ") > 0"));
     study.signal_group(SIGKILL);
     CHECK(study.wait() == 128 + SIGKILL);
   }
@@ -249,16 +251,21 @@ TEST_CASE("a study killed mid-run loses only its points in progress and resumes 
   CHECK(pdamp_cli({"study", "show", "1", "--db", killed.string()}, dir)
             .out.find(") is gone; 'pdamp study resume 1' runs it again") != std::string::npos);
 
+  const std::string checkpointed = test::unfinished_checkpointed_run_ids(killed);
   const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") == 6);
-  // Completed points were not run again; the others were, from their start.
+  // Completed points were not run again; the others continued their runs from their
+  // checkpoints (a run without one starts over, the old one left interrupted).
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE attempt = 1") >= completed_before);
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE attempt > 1") >= 2);
   CHECK(count_rows(killed, "SELECT count(*) FROM runs WHERE status = 'running'") == 0);
-  CHECK(count_rows(killed,
-                   "SELECT count(*) FROM runs WHERE status = 'interrupted' AND message LIKE '%ended before%'") >= 1);
+  INFO("runs with a checkpoint before the resume: " << checkpointed);
+  CHECK(checkpointed != "()");
+  CHECK(test::runs_continued_by_their_points(killed, checkpointed) ==
+        count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
+  CHECK(count_rows(killed, "SELECT count(*) FROM runs WHERE status = 'completed'") == 6);
   const auto [differing, compared] = sample_differences(reference, killed);
   CHECK(compared == 6 * 1201);  // 0.6 s sampled every 0.5 ms
   CHECK(differing == 0);

@@ -71,19 +71,6 @@ po::options_description duration_option() {
   return o;
 }
 
-po::options_description checkpoint_option() {
-  po::options_description o("checkpoints (docs/checkpoints.md)");
-  o.add_options()("checkpoint-every", po::value<std::string>()->value_name("SECONDS")->default_value("60"),
-                  "save the run's state in the store every SECONDS of wall time, with the results up to it, so that "
-                  "`pdamp resume` continues it if it is stopped or killed; 0: no checkpoints");
-  return o;
-}
-
-std::chrono::milliseconds checkpoint_interval(const po::variables_map& vm) {
-  const double seconds = parse_seconds(vm["checkpoint-every"].as<std::string>(), 0.0, true, 1e6, "--checkpoint-every");
-  return std::chrono::ceil<std::chrono::milliseconds>(std::chrono::duration<double>(seconds));
-}
-
 /// The scenario file with --set and --duration, in the order given (the last of a key wins).
 ScenarioRequest scenario_request(const CommandLine& line, const std::string& command) {
   ScenarioRequest request{required_option(line.vm, "scenario", command), {}};

@@ -66,6 +66,19 @@ std::optional<SnapshotSettings> snapshot_request(const po::variables_map& vm) {
                                  default_snapshot_directory(vm["db"].as<std::string>()));
 }
 
+po::options_description checkpoint_option() {
+  po::options_description o("checkpoints (docs/checkpoints.md)");
+  o.add_options()("checkpoint-every", po::value<std::string>()->value_name("SECONDS")->default_value("60"),
+                  "save the run's state in the store every SECONDS of wall time, with the results up to it, so that "
+                  "`pdamp resume` (or a study's resume) continues it if it is stopped or killed; 0: no checkpoints");
+  return o;
+}
+
+std::chrono::milliseconds checkpoint_interval(const po::variables_map& vm) {
+  const double seconds = parse_seconds(vm["checkpoint-every"].as<std::string>(), 0.0, true, 1e6, "--checkpoint-every");
+  return std::chrono::ceil<std::chrono::milliseconds>(std::chrono::duration<double>(seconds));
+}
+
 double parse_seconds(const std::string& text, double min_s, bool min_allowed, double max_s, const std::string& what) {
   double value = 0.0;
   const char* end = text.data() + text.size();

@@ -2,6 +2,7 @@
 /// Command-line parsing shared by the CLI's commands (Boost.Program_options).
 
 #include <boost/program_options.hpp>
+#include <chrono>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,13 @@ boost::program_options::options_description snapshot_options();
 /// --snapshots and --snapshot-dir, if given (checked against a scenario by plan_run); the
 /// directory defaults to one beside the --db store.
 std::optional<SnapshotSettings> snapshot_request(const boost::program_options::variables_map& vm);
+
+/// --checkpoint-every SECONDS, default 60 (pdamp run, compare, resume, study run, resume and run-point).
+boost::program_options::options_description checkpoint_option();
+
+/// The wall time between checkpoints --checkpoint-every gives (0: none); InputError if it is not a
+/// number of seconds from 0 to 10^6.
+std::chrono::milliseconds checkpoint_interval(const boost::program_options::variables_map& vm);
 
 /// A whole number from `min` to `max` given for `what`; InputError otherwise.
 long parse_whole_number(const std::string& text, long min, long max, const std::string& what);

@@ -35,10 +35,12 @@ constexpr const char* study_usage =
     "usage: pdamp study <command> [options]\n"
     "\n"
     "commands:\n"
-    "  run STUDY.ini [--jobs N] [--threads N] [--snapshots EVERY_S [--snapshot-dir DIR]] [--force] [--db FILE]\n"
+    "  run STUDY.ini [--jobs N] [--threads N] [--snapshots EVERY_S [--snapshot-dir DIR]] [--checkpoint-every S]\n"
+    "          [--force] [--db FILE]\n"
     "          validate every point, store the study, run its points N at a time; running an\n"
     "          unchanged study again resumes it (completed points are kept)\n"
-    "  resume STUDY_ID [--jobs N] [--threads N] [--snapshots EVERY_S [--snapshot-dir DIR]] [--db FILE]\n"
+    "  resume STUDY_ID [--jobs N] [--threads N] [--snapshots EVERY_S [--snapshot-dir DIR]] [--checkpoint-every S]\n"
+    "          [--db FILE]\n"
     "          run the points of a stored study that are not completed\n"
     "  list [--db FILE]                  the stored studies\n"
     "  show STUDY_ID [--db FILE]         every point of a study: values, status, metrics\n"
@@ -242,6 +244,7 @@ void add_run_options(Subcommand& command) {
       "soft-engine threads per point (default: the cores shared among the jobs); results are the same bits for any "
       "number");
   command.add(snapshot_options());
+  command.add(checkpoint_option());
 }
 
 /// The runner's options from the command line, checked before the store is touched.
@@ -250,7 +253,9 @@ StudyRunOptions runner_options(const po::variables_map& vm) {
   options.jobs = static_cast<int>(parse_whole_number(vm["jobs"].as<std::string>(), 1, 256, "--jobs"));
   options.threads_per_worker = threads_per_worker(vm, options.jobs);
   options.db = vm["db"].as<std::string>();
-  options.worker = {"/proc/self/exe", {"study", "run-point"}};
+  checkpoint_interval(vm);  // checked here, before the store is touched
+  options.worker = {"/proc/self/exe",
+                    {"study", "run-point", "--checkpoint-every", vm["checkpoint-every"].as<std::string>()}};
   if (const auto snapshots = snapshot_request(vm)) {
     // Each worker writes its runs' snapshots where this process would have.
     options.worker.arguments.insert(options.worker.arguments.end(),
@@ -326,6 +331,7 @@ int study_run_point(const std::vector<std::string>& args) {
   command.add_options()("threads", po::value<std::string>(), "soft-engine threads")(
       "report-progress", "progress lines on stdout for the study runner");
   command.add(snapshot_options());
+  command.add(checkpoint_option());
   if (!command.parse(args)) return 0;
   const auto& vm = command.vm();
   const auto point =
@@ -338,6 +344,7 @@ int study_run_point(const std::vector<std::string>& args) {
   control.stop = stop_flag();
   control.warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
   control.snapshots = snapshot_request(vm);
+  control.checkpoint_interval = checkpoint_interval(vm);
   if (vm.count("report-progress")) {
     std::signal(SIGPIPE, SIG_IGN);  // a runner that is gone must not kill the point before it is stored
     control.progress = [](double fraction, std::string_view phase) {

@@ -5,31 +5,41 @@
 #include <numbers>
 #include <vector>
 
+#include "pdamp/errors.hpp"
 #include "pdamp/model/cavity.hpp"
+#include "pdamp/sim/run_checkpoint.hpp"
 
 namespace pdamp {
 
 SteadyCycles run_to_steady_state(Engine& engine, double omega_rad_s, const SteadyStateCriterion& criterion,
-                                 SteadyWatch watch, const CycleHooks& hooks) {
+                                 SteadyWatch watch, CycleLog& log, const CycleHooks& hooks) {
   const auto wall_start = std::chrono::steady_clock::now();
   const double period_s = 2.0 * std::numbers::pi / omega_rad_s;
-  Observation now = engine.observe();
+  const std::size_t logged = log.boundaries.size();  // of a point resumed: its cycles so far
+  auto boundary = [&] {
+    log.boundaries.push_back(engine.observe());
+    if (hooks.at_boundary) hooks.at_boundary(log.boundaries.back());
+    return log.boundaries.back();
+  };
+  Observation now = logged > 0 ? log.boundaries.front() : boundary();
   const double t0_s = now.t_s;
-  if (hooks.at_boundary) hooks.at_boundary(now);
   int cycles = 0;
   // The last n + 1 cycle boundaries: the measured cycles if the point never settles.
   std::deque<Observation> recent{now};
   auto next_cycle = [&] {
     ++cycles;
-    const double t_end_s = t0_s + cycles * period_s;
-    if (hooks.advance_cycle) {
-      hooks.advance_cycle(engine, t_end_s);
-    } else {
-      engine.advance_to(t_end_s);
-    }
     const Observation before = now;
-    now = engine.observe();
-    if (hooks.at_boundary) hooks.at_boundary(now);
+    if (static_cast<std::size_t>(cycles) < logged) {
+      now = log.boundaries[static_cast<std::size_t>(cycles)];
+    } else {
+      const double t_end_s = t0_s + cycles * period_s;
+      if (hooks.advance_cycle) {
+        hooks.advance_cycle(engine, t_end_s);
+      } else {
+        engine.advance_to(t_end_s);
+      }
+      now = boundary();
+    }
     recent.push_back(now);
     if (recent.size() > static_cast<std::size_t>(criterion.measured_cycles) + 1) recent.pop_front();
     return first_harmonics(before, now);
@@ -56,28 +66,34 @@ SteadyCycles run_to_steady_state(Engine& engine, double omega_rad_s, const Stead
 }
 
 FrfPointOutcome run_frf_point(Engine& engine, const Scenario& scenario, const SteadyStateCriterion& criterion,
-                              const std::function<void(const Observation&)>& at_boundary) {
+                              const std::function<void(const Observation&)>& at_boundary, CycleLog* log) {
   const FrfDrive drive = FrfDrive::of(scenario);
-  const SteadyCycles run =
-      run_to_steady_state(engine, drive.omega_rad_s, criterion, SteadyWatch::displacement, {at_boundary, {}});
+  CycleLog own;
+  const SteadyCycles run = run_to_steady_state(engine, drive.omega_rad_s, criterion, SteadyWatch::displacement,
+                                               log ? *log : own, {at_boundary, {}});
   return {response_metrics(run.measured, drive, run.settled, run.cycles_to_steady), run.cycles_run, run.wall_time_s};
 }
 
 namespace {
 
 /// A point's cycles as a stored run: one sample per boundary, its energy balance checked,
-/// the control's stop and progress; `body` runs the point with the boundary hook given.
+/// the control's stop, progress and checkpoints; `body` runs the point with the boundary
+/// hook and the cycle log given (from `resume`'s if resumed).
 template <typename Body>
-RunOutcome run_cycles_simulation(Engine& engine, RunRecorder& recorder, const RunControl& control, Body&& body) {
+RunOutcome run_cycles_simulation(Engine& engine, RunRecorder& recorder, const RunControl& control,
+                                 const CycleLoopState* resume, Body&& body) {
   using clock = std::chrono::steady_clock;
   const auto wall_start = clock::now();
   auto next_progress = wall_start;
-  RunOutcome outcome;
+  auto next_checkpoint = wall_start + control.checkpoint_interval;
+  const bool checkpoints = control.checkpoint_interval.count() > 0;
+  CycleLoopState state = resume ? *resume : CycleLoopState{};
+  RunOutcome& outcome = state.outcome;
+  const double wall_before_s = outcome.wall_time_s;  // of the processes that ran it before this one
+  auto wall_time_s = [&] { return wall_before_s + std::chrono::duration<double>(clock::now() - wall_start).count(); };
   engine.set_stop_request(control.stop);
-  bool first = true;
   auto at_boundary = [&](const Observation& now) {
-    if (first) outcome.initial_energy_J = now.energy.stored_J();
-    first = false;
+    if (outcome.samples == 0) outcome.initial_energy_J = now.energy.stored_J();
     const double error = now.energy.balance_relative_error(outcome.initial_energy_J);
     if (!std::isfinite(now.host.z_m) || !std::isfinite(now.host.v_m_s) || !std::isfinite(error)) {
       throw RuntimeFailure("the state stopped being finite at t = " + std::to_string(now.t_s) + " s");
@@ -86,13 +102,21 @@ RunOutcome run_cycles_simulation(Engine& engine, RunRecorder& recorder, const Ru
     recorder.record_sample(now, error);
     ++outcome.samples;
     outcome.sim_time_s = now.t_s;
+    const bool stop = control.stop && control.stop->load();
+    if (checkpoints && (stop || clock::now() >= next_checkpoint)) {
+      CycleLoopState saved{outcome, state.log};
+      saved.outcome.wall_time_s = wall_time_s();
+      recorder.flush_with_checkpoint(save_checkpoint(saved, engine, now.t_s));
+      next_checkpoint = clock::now() + control.checkpoint_interval;
+    }
+    if (stop) throw Interrupted("stopped");  // the message is the run loop's, below
     if (control.progress && clock::now() >= next_progress) {
       control.progress(now.t_s);
       next_progress = clock::now() + std::chrono::milliseconds(500);
     }
   };
   try {
-    body(std::function<void(const Observation&)>(at_boundary));
+    body(std::function<void(const Observation&)>(at_boundary), state.log);
   } catch (const Interrupted&) {
     outcome.status = RunStatus::interrupted;
     outcome.message = "stopped by a signal at t = " + std::to_string(outcome.sim_time_s) + " s";
@@ -106,7 +130,7 @@ RunOutcome run_cycles_simulation(Engine& engine, RunRecorder& recorder, const Ru
     outcome.status = RunStatus::failed;
     outcome.message += (outcome.message.empty() ? "" : "; ") + std::string("results not all stored: ") + e.what();
   }
-  outcome.wall_time_s = std::chrono::duration<double>(clock::now() - wall_start).count();
+  outcome.wall_time_s = wall_time_s();
   return outcome;
 }
 
@@ -132,16 +156,19 @@ WallTouch wall_touch(const State& state, const Cavity& cavity) {
 }  // namespace
 
 RunOutcome run_frf_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
-                              const RunControl& control, const SteadyStateCriterion& criterion, FrfRun& result) {
-  return run_cycles_simulation(engine, recorder, control, [&](const std::function<void(const Observation&)>& hook) {
-    result.point = run_frf_point(engine, scenario, criterion, hook);
-    result.final_state = engine.state();
-  });
+                              const RunControl& control, const SteadyStateCriterion& criterion, FrfRun& result,
+                              const CycleLoopState* resume) {
+  return run_cycles_simulation(engine, recorder, control, resume,
+                               [&](const std::function<void(const Observation&)>& hook, CycleLog& log) {
+                                 result.point = run_frf_point(engine, scenario, criterion, hook, &log);
+                                 result.final_state = engine.state();
+                               });
 }
 
 CharacterisationPointOutcome run_characterisation_point(Engine& engine, const Scenario& scenario,
                                                         const SteadyStateCriterion& criterion,
-                                                        const std::function<void(const Observation&)>& at_boundary) {
+                                                        const std::function<void(const Observation&)>& at_boundary,
+                                                        CycleLog* log) {
   const ExcitationSettings& e = scenario.excitation;
   if (e.mode != ExcitationMode::prescribed_motion) {
     throw InputError("a characterisation point needs excitation.mode = prescribed");
@@ -149,22 +176,24 @@ CharacterisationPointOutcome run_characterisation_point(Engine& engine, const Sc
   const double omega_rad_s = e.angular_frequency_rad_s();
   const Cavity cavity(scenario.cavity);
   // Each cycle's instants touching the floor and the lid; the measured cycles are the last.
-  std::vector<std::pair<int, int>> touches;
+  CycleLog own;
+  CycleLog& cycles = log ? *log : own;
+  std::vector<WallTouches>& touches = cycles.touches;
   CycleHooks hooks{at_boundary, [&](Engine& engine_, double t_end_s) {
                      const double period_s = 2.0 * std::numbers::pi / omega_rad_s;
                      const double t_start_s = t_end_s - period_s;
-                     std::pair<int, int> count{0, 0};
+                     WallTouches count;
                      for (int k = 1; k <= contact_instants_per_cycle; ++k) {
                        engine_.advance_to(k == contact_instants_per_cycle
                                               ? t_end_s
                                               : t_start_s + period_s * k / contact_instants_per_cycle);
                        const WallTouch touch = wall_touch(engine_.state(), cavity);
-                       count.first += touch.floor ? 1 : 0;
-                       count.second += touch.lid ? 1 : 0;
+                       count.floor += touch.floor ? 1 : 0;
+                       count.lid += touch.lid ? 1 : 0;
                      }
                      touches.push_back(count);
                    }};
-  const SteadyCycles run = run_to_steady_state(engine, omega_rad_s, criterion, SteadyWatch::load, hooks);
+  const SteadyCycles run = run_to_steady_state(engine, omega_rad_s, criterion, SteadyWatch::load, cycles, hooks);
   const double particle_mass_kg = engine.state().particles.total_mass_kg();
   CharacterisationPointOutcome outcome{characterisation_metrics(run.measured, omega_rad_s, scenario.gravity_m_s2.norm(),
                                                                 particle_mass_kg, run.settled, run.cycles_to_steady),
@@ -172,8 +201,8 @@ CharacterisationPointOutcome run_characterisation_point(Engine& engine, const Sc
   const auto n = static_cast<std::size_t>(outcome.metrics.measured_cycles);
   int floor = 0, lid = 0;
   for (std::size_t k = touches.size() - n; k < touches.size(); ++k) {
-    floor += touches[k].first;
-    lid += touches[k].second;
+    floor += touches[k].floor;
+    lid += touches[k].lid;
   }
   const double instants = static_cast<double>(n) * contact_instants_per_cycle;
   outcome.metrics.floor_contact_fraction = floor / instants;
@@ -183,11 +212,12 @@ CharacterisationPointOutcome run_characterisation_point(Engine& engine, const Sc
 
 RunOutcome run_characterisation_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
                                            const RunControl& control, const SteadyStateCriterion& criterion,
-                                           CharacterisationRun& result) {
-  return run_cycles_simulation(engine, recorder, control, [&](const std::function<void(const Observation&)>& hook) {
-    result.point = run_characterisation_point(engine, scenario, criterion, hook);
-    result.final_state = engine.state();
-  });
+                                           CharacterisationRun& result, const CycleLoopState* resume) {
+  return run_cycles_simulation(engine, recorder, control, resume,
+                               [&](const std::function<void(const Observation&)>& hook, CycleLog& log) {
+                                 result.point = run_characterisation_point(engine, scenario, criterion, hook, &log);
+                                 result.final_state = engine.state();
+                               });
 }
 
 }  // namespace pdamp

@@ -19,34 +19,66 @@ template void CycleAnalyzer::transfer(CycleAnalyzer&, CheckpointReader&);
 
 namespace {
 
+/// What a run has recorded so far, both ways.
+template <class Outcome, class Archive>
+void transfer_outcome(Outcome& outcome, Archive& a) {
+  a.io(outcome.samples);
+  a.io(outcome.cycles);
+  for (auto* value :
+       {&outcome.sim_time_s, &outcome.wall_time_s, &outcome.initial_energy_J, &outcome.energy_balance_rel_err}) {
+    a.io(*value);
+  }
+}
+
 /// The run loop's part, both ways.
 template <class Loop, class Archive>
 void transfer_loop(Loop& loop, Archive& a) {
   a.section("run loop");
   a.io(loop.interval);
   a.io(loop.step);
-  a.io(loop.outcome.samples);
-  a.io(loop.outcome.cycles);
-  for (auto* value : {&loop.outcome.sim_time_s, &loop.outcome.wall_time_s, &loop.outcome.initial_energy_J,
-                      &loop.outcome.energy_balance_rel_err}) {
-    a.io(*value);
-  }
+  transfer_outcome(loop.outcome, a);
   a.part(loop.cycles);
 }
 
-}  // namespace
+/// A cycle-by-cycle point's part, both ways.
+template <class Loop, class Archive>
+void transfer_cycle_loop(Loop& loop, Archive& a) {
+  a.section("cycle-by-cycle loop");
+  transfer_outcome(loop.outcome, a);
+  a.io(loop.log.boundaries);
+  a.io(loop.log.touches);
+}
 
-RunCheckpoint save_checkpoint(const RunLoopState& loop, const Engine& engine, double t_s) {
+template <class Loop>
+RunCheckpoint checkpoint_of(const Loop& loop, void (*transfer)(const Loop&, CheckpointWriter&), const Engine& engine,
+                            double t_s) {
   CheckpointWriter out(RunStore::schema_version());
-  transfer_loop(loop, out);
+  transfer(loop, out);
   out.section("engine");
   engine.save(out);
   return {t_s, loop.outcome.samples, loop.outcome.cycles, out.finish()};
 }
 
+}  // namespace
+
+RunCheckpoint save_checkpoint(const RunLoopState& loop, const Engine& engine, double t_s) {
+  return checkpoint_of(loop, &transfer_loop<const RunLoopState, CheckpointWriter>, engine, t_s);
+}
+
+RunCheckpoint save_checkpoint(const CycleLoopState& loop, const Engine& engine, double t_s) {
+  return checkpoint_of(loop, &transfer_cycle_loop<const CycleLoopState, CheckpointWriter>, engine, t_s);
+}
+
 RunLoopState read_run_loop_state(CheckpointReader& in) {
   RunLoopState loop{0, 0, {}, CycleAnalyzer(0.0, 0.0, 0.0)};
   transfer_loop(loop, in);
+  in.section("engine");
+  return loop;
+}
+
+CycleLoopState read_cycle_loop_state(CheckpointReader& in) {
+  CycleLoopState loop;
+  transfer_cycle_loop(loop, in);
   in.section("engine");
   return loop;
 }

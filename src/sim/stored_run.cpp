@@ -124,7 +124,8 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
 }
 
 StoredRun resume_and_store(RunStore& store, std::int64_t run_id, std::optional<double> until_s,
-                           const RunControl& control, const std::function<void(const std::string&)>& warn) {
+                           const RunControl& control, const std::function<void(const std::string&)>& warn,
+                           const ResumedBody& body, const std::function<void()>& claimed) {
   const ResumableRun run = store.resumable_run(run_id, until_s);
   const Model model = parse_model(run.model);
   ScenarioOverrides overrides;
@@ -135,26 +136,30 @@ StoredRun resume_and_store(RunStore& store, std::int64_t run_id, std::optional<d
   const Particles bed = run.initial_state_id ? store.load_initial_particles(*run.initial_state_id) : Particles(0);
   // Restored before the store is touched: a checkpoint that does not fit changes nothing.
   CheckpointReader checkpoint(run.checkpoint.state);
-  const RunLoopState loop = read_run_loop_state(checkpoint);
+  const std::optional<RunLoopState> loop = body ? std::nullopt : std::optional(read_run_loop_state(checkpoint));
+  const RunBody resumed_body = body ? body(checkpoint) : RunBody{};
   const auto engine = restore_engine(setup, scenario, bed, checkpoint);
-  // The run's snapshots go on in their folder from the checkpoint's observation.
-  const std::optional<SnapshotRecord> recorded = store.snapshots(run_id);
+  // The run loop's snapshots go on in their folder from the checkpoint's observation.
+  const std::optional<SnapshotRecord> recorded = loop ? store.snapshots(run_id) : std::nullopt;
   const SnapshotFiles files = recorded ? SnapshotFiles{recorded->folder, recorded->collection} : SnapshotFiles{};
-  const std::int64_t checkpoint_step = loop.interval * observation_grid(scenario).steps_per_sample + loop.step;
+  const std::int64_t checkpoint_step =
+      loop ? loop->interval * observation_grid(scenario).steps_per_sample + loop->step : 0;
   if (recorded) check_resumable_snapshots(files, recorded->interval_s, scenario, run_id, checkpoint_step);
   store.claim_for_resume(run, scenario.run.duration_s, scenario.canonical_text);
+  if (claimed) claimed();
   StoredRun result{run_id, {}};
   std::optional<SnapshotWriter> snapshots;
   try {
     if (recorded) snapshots.emplace(files, recorded->interval_s, scenario, checkpoint_step);
   } catch (const std::exception& e) {
-    result.outcome = loop.outcome;
+    result.outcome = loop->outcome;
     result.outcome.status = RunStatus::failed;
     result.outcome.message = e.what();
   }
   if (!recorded || snapshots) {
     RunWriter writer(store, run_id);
-    result.outcome = run_simulation(*engine, scenario, writer, with_snapshots(control, snapshots), &loop);
+    result.outcome = loop ? run_simulation(*engine, scenario, writer, with_snapshots(control, snapshots), &*loop)
+                          : resumed_body(*engine, scenario, writer, control);
   }
   store_engine_results(store, run_id, *engine, result.outcome, warn);
   if (snapshots)

@@ -279,6 +279,24 @@ void StudyStore::link_run(std::int64_t study_id, int point, int attempt, std::st
   });
 }
 
+std::optional<std::int64_t> StudyStore::earlier_run(std::int64_t study_id, int point, int attempt,
+                                                    std::string_view model) {
+  sqlite::Statement q(db(),
+                      "SELECT run_id FROM study_point_runs WHERE study_id = ? AND point = ? AND attempt < ? AND "
+                      "model = ? ORDER BY attempt DESC LIMIT 1");
+  q.bind(1, study_id).bind(2, point).bind(3, attempt).bind(4, model);
+  if (!q.step()) return std::nullopt;
+  return q.column_int(0);
+}
+
+void StudyStore::move_run(std::int64_t study_id, int point, int attempt, std::int64_t run_id) {
+  sqlite::write_transaction(db(), [&] {
+    sqlite::Statement move(db(),
+                           "UPDATE study_point_runs SET attempt = ? WHERE study_id = ? AND point = ? AND run_id = ?");
+    move.bind(1, attempt).bind(2, study_id).bind(3, point).bind(4, run_id).run();
+  });
+}
+
 void StudyStore::complete_point(std::int64_t study_id, int point, int attempt, const std::vector<std::int64_t>& run_ids,
                                 std::optional<std::int64_t> comparison_id) {
   sqlite::write_transaction(db(), [&] {

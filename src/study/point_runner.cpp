@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -73,15 +74,17 @@ class PointExecution {
     PointRuns result;
     for (std::size_t m = 0; m < plans.size(); ++m) {
       const std::string_view model = to_string(plans[m].engine.model);
-      RunControl run_control;
-      run_control.stop = control_->stop;
-      run_control.progress = [&, duration = scenario.run.duration_s](double t) {
+      const RunControl run_control = run_control_for([&, m, duration = scenario.run.duration_s](double t) {
         report((static_cast<double>(m) + t / duration) / static_cast<double>(plans.size()), model);
-      };
-      result.runs.push_back(
-          run_and_store(*store_, plans[m], bed_source, run_control, control_->warn,
-                        [&](std::int64_t run_id) { studies_.link_run(study_id_, point_, attempt_, model, run_id); }));
-      if (result.runs.back().outcome.status != RunStatus::completed) return result;
+      });
+      std::optional<StoredRun> run = continue_earlier_run(model, run_control, {}, true);
+      if (!run) {
+        run = run_and_store(*store_, plans[m], bed_source, run_control, control_->warn, [&](std::int64_t run_id) {
+          studies_.link_run(study_id_, point_, attempt_, model, run_id);
+        });
+      }
+      result.runs.push_back(*run);
+      if (run->outcome.status != RunStatus::completed) return result;
     }
     if (plans.size() == 2) {
       result.comparison_id =
@@ -128,9 +131,43 @@ class PointExecution {
     return {std::move(spheres), state_id, true, from.t_s};
   }
 
-  /// A point run cycle by cycle (`plan.body` set), from the previous point's final state
-  /// `from` (moved by `shift`) or from the settled bed, into the store linked to the point.
-  StoredRun run_cycles(const Scenario& scenario, Model model, const RunPlan& plan,
+  /// The control of a run of this point: its stop, checkpoints and `progress`.
+  RunControl run_control_for(std::function<void(double t_s)> progress) const {
+    RunControl run_control;
+    run_control.stop = control_->stop;
+    run_control.checkpoint_interval = control_->checkpoint_interval;
+    run_control.progress = std::move(progress);
+    return run_control;
+  }
+
+  /// This point's run of `model` that an earlier attempt left, taken over by this attempt:
+  /// as it is if it completed and `keep_completed`, or resumed from its checkpoint (with
+  /// `body` if it is not the run loop's) to its end. Nothing if there is none, or if it
+  /// cannot be resumed: then the reason is reported and the model runs from its start.
+  std::optional<StoredRun> continue_earlier_run(std::string_view model, const RunControl& run_control,
+                                                const ResumedBody& body, bool keep_completed) {
+    const std::optional<std::int64_t> run_id = studies_.earlier_run(study_id_, point_, attempt_, model);
+    if (!run_id) return std::nullopt;
+    const auto take_over = [&] { studies_.move_run(study_id_, point_, attempt_, *run_id); };
+    const std::string run = "run " + std::to_string(*run_id) + " (" + std::string(model) + ")";
+    if (keep_completed && store_->summary(*run_id)->status == to_string(RunStatus::completed)) {
+      take_over();
+      return StoredRun{*run_id, {}};
+    }
+    try {
+      return resume_and_store(*store_, *run_id, std::nullopt, run_control, control_->warn, body, take_over);
+    } catch (const Interrupted&) {
+      throw;
+    } catch (const std::exception& e) {
+      if (control_->warn) control_->warn(run + " of an earlier attempt is run again from its start: " + e.what());
+      return std::nullopt;
+    }
+  }
+
+  /// A point run cycle by cycle (`plan.body` set; `resumed`, the same from a checkpoint),
+  /// from the previous point's final state `from` (moved by `shift`) or from the settled
+  /// bed, into the store linked to the point; or the run an earlier attempt left, resumed.
+  StoredRun run_cycles(const Scenario& scenario, Model model, const RunPlan& plan, const ResumedBody& resumed,
                        const std::optional<FrfEndState>& from, const std::optional<HostState>& shift = {}) {
     std::optional<InitialBed> bed;
     const BedSource bed_source = [&]() -> const InitialBed& {
@@ -138,9 +175,9 @@ class PointExecution {
       return settled_bed(scenario, bed);
     };
     const std::string_view name = to_string(model);
-    RunControl run_control;
-    run_control.stop = control_->stop;
-    run_control.progress = [&, duration = scenario.run.duration_s](double t) { report(t / duration, name); };
+    const RunControl run_control =
+        run_control_for([&, duration = scenario.run.duration_s](double t) { report(t / duration, name); });
+    if (auto run = continue_earlier_run(name, run_control, resumed, false)) return *run;
     return run_and_store(*store_, plan, bed_source, run_control, control_->warn,
                          [&](std::int64_t run_id) { studies_.link_run(study_id_, point_, attempt_, name, run_id); });
   }
@@ -157,12 +194,14 @@ class PointExecution {
     const Scenario scenario = point_scenario(*study_, point, host);
     RunPlan plan = plan_run(frf.model, scenario);
     FrfRun frf_run;
-    plan.body = [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s,
-                                                                 RunRecorder& recorder, const RunControl& c) {
-      return run_frf_simulation(engine, s, recorder, c, criterion, frf_run);
-    };
+    const auto [body, resumed] = cycle_bodies(
+        [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s, RunRecorder& recorder,
+                                                         const RunControl& c, const CycleLoopState* resume) {
+          return run_frf_simulation(engine, s, recorder, c, criterion, frf_run, resume);
+        });
+    plan.body = body;
     PointRuns result;
-    result.runs.push_back(run_cycles(scenario, frf.model, plan, from, shift));
+    result.runs.push_back(run_cycles(scenario, frf.model, plan, resumed, from, shift));
     const StoredRun& run = result.runs.back();
     if (run.outcome.status != RunStatus::completed) return result;
     const State& end = frf_run.final_state;
@@ -201,12 +240,14 @@ class PointExecution {
     const Scenario scenario = point_scenario(*study_, point);
     RunPlan plan = plan_run(c.model, scenario);
     CharacterisationRun characterisation;
-    plan.body = [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s,
-                                                                 RunRecorder& recorder, const RunControl& rc) {
-      return run_characterisation_simulation(engine, s, recorder, rc, criterion, characterisation);
-    };
+    const auto [body, resumed] = cycle_bodies(
+        [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s, RunRecorder& recorder,
+                                                         const RunControl& rc, const CycleLoopState* resume) {
+          return run_characterisation_simulation(engine, s, recorder, rc, criterion, characterisation, resume);
+        });
+    plan.body = body;
     PointRuns result;
-    result.runs.push_back(run_cycles(scenario, c.model, plan, from));
+    result.runs.push_back(run_cycles(scenario, c.model, plan, resumed, from));
     const StoredRun& run = result.runs.back();
     if (run.outcome.status != RunStatus::completed) return result;
     std::optional<InitialBed> settled;
@@ -222,6 +263,23 @@ class PointExecution {
                                                   {run.run_id, 0, end.observation.t_s, end.observation.host}};
     result.end_spheres = end.particles;
     return result;
+  }
+
+  /// A cycle-by-cycle point's body (`run` from its start) and the same resumed from a
+  /// checkpoint (`run` from the loop state the checkpoint holds).
+  using CycleBody =
+      std::function<RunOutcome(Engine&, const Scenario&, RunRecorder&, const RunControl&, const CycleLoopState*)>;
+  static std::pair<RunBody, ResumedBody> cycle_bodies(const CycleBody& run) {
+    const RunBody from_start = [run](Engine& e, const Scenario& s, RunRecorder& r, const RunControl& c) {
+      return run(e, s, r, c, nullptr);
+    };
+    const ResumedBody resumed = [run](CheckpointReader& checkpoint) -> RunBody {
+      auto loop = std::make_shared<const CycleLoopState>(read_cycle_loop_state(checkpoint));
+      return [run, loop](Engine& e, const Scenario& s, RunRecorder& r, const RunControl& c) {
+        return run(e, s, r, c, loop.get());
+      };
+    };
+    return {from_start, resumed};
   }
 
   /// L: the cavity's height above the settled bed's top (the bed settled with the host at

@@ -20,14 +20,17 @@
 
 namespace pdamp {
 
+/// What drives a run's engine once it is built (or restored).
+using RunBody = std::function<RunOutcome(Engine&, const Scenario&, RunRecorder&, const RunControl&)>;
+
 /// A model checked to run a scenario, with what it needs that depends on the scenario alone.
 struct RunPlan {
   EngineSetup engine;
   const Scenario* scenario;
   std::optional<SnapshotSettings> snapshots;  ///< checked against the scenario
-  /// What drives the engine once it is built: empty for the run loop over the scenario's
-  /// duration (run_simulation), or another driver (a frequency-response point's cycles).
-  std::function<RunOutcome(Engine&, const Scenario&, RunRecorder&, const RunControl&)> body;
+  /// Empty for the run loop over the scenario's duration (run_simulation), or another
+  /// driver (a frequency-response point's cycles).
+  RunBody body;
 };
 
 /// The engine's setup (prepare_engine: the model can run `scenario`, calibrated if the
@@ -55,13 +58,21 @@ StoredRun run_and_store(RunStore& store, const RunPlan& plan, const BedSource& b
                         const std::function<void(const std::string&)>& warn = {},
                         const std::function<void(std::int64_t run_id)>& started = {});
 
+/// How a run driven by another body than the run loop goes on from its checkpoint: reads
+/// the loop's part of it (before the engine's) and gives the body that drives the
+/// restored engine from there.
+using ResumedBody = std::function<RunBody(CheckpointReader& checkpoint)>;
+
 /// Continues a stored run from its checkpoint (pdamp resume, docs/checkpoints.md) to its
 /// end, or on to `until_s` (then the run's end and scenario say so), as run_and_store runs
 /// one: the samples and cycles it had recorded after the checkpoint are dropped, and
-/// what follows is recorded with the same bits as if the run had never stopped. Throws,
-/// changing nothing, InputError for a run that cannot be resumed (RunStore::resumable_run)
-/// and RuntimeFailure for a checkpoint that does not fit its engine.
+/// what follows is recorded with the same bits as if the run had never stopped; so are
+/// its snapshots (run loop only). `body` continues a run of another driver (empty: the run
+/// loop); `claimed` hears that the run is taken over, before it goes on. Throws, changing
+/// nothing, InputError for a run that cannot be resumed (RunStore::resumable_run) and
+/// RuntimeFailure for a checkpoint that does not fit its engine or its driver.
 StoredRun resume_and_store(RunStore& store, std::int64_t run_id, std::optional<double> until_s,
-                           const RunControl& control, const std::function<void(const std::string&)>& warn = {});
+                           const RunControl& control, const std::function<void(const std::string&)>& warn = {},
+                           const ResumedBody& body = {}, const std::function<void()>& claimed = {});
 
 }  // namespace pdamp

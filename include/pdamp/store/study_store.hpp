@@ -204,6 +204,10 @@ class StudyStore {
   /// next attempt; returns the attempt, or nothing if the point is completed or running.
   std::optional<int> claim_point(std::int64_t study_id, int point, const ProcessLease& lease);
   void link_run(std::int64_t study_id, int point, int attempt, std::string_view model, std::int64_t run_id);
+  /// The point's run of `model` linked to its latest attempt before `attempt`, if any.
+  std::optional<std::int64_t> earlier_run(std::int64_t study_id, int point, int attempt, std::string_view model);
+  /// Links a run of an earlier attempt of the point to `attempt` instead (it continues there).
+  void move_run(std::int64_t study_id, int point, int attempt, std::int64_t run_id);
   /// Completes the point's attempt: each run's metrics, computed from its stored samples
   /// and cycles, and the comparison of the two models if there is one.
   void complete_point(std::int64_t study_id, int point, int attempt, const std::vector<std::int64_t>& run_ids,

@@ -3,6 +3,7 @@
 /// starts once per point, and which a cluster task can run on its own.
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -32,6 +33,9 @@ struct PointRunControl {
   std::function<void(double fraction, std::string_view phase)> progress;
   std::function<void(const std::string& warning)> warn;
   std::optional<SnapshotSettings> snapshots;  ///< each run's snapshots, checked by validate_study
+  /// Wall time between its runs' checkpoints (0: none). A point an earlier attempt left
+  /// continues its runs from their checkpoints (docs/checkpoints.md).
+  std::chrono::milliseconds checkpoint_interval{0};
 };
 
 struct PointResult {
@@ -42,8 +46,11 @@ struct PointResult {
 
 /// Claims the point (study_store.hpp), settles or reuses its bed, runs its model(s) into
 /// the store linked to the point, and completes it with its metrics, or ends it as failed
-/// or interrupted with the reason. A point completed or running elsewhere is left alone
-/// (status pending, with the reason in the message).
+/// or interrupted with the reason. A model's run that an earlier attempt of the point left
+/// is taken over: kept if it completed (a sweep point's), resumed from its checkpoint if
+/// not; one that cannot be resumed (no checkpoint, another pdamp's, failed) is reported
+/// through `control.warn` and the model runs from its start. A point completed or running
+/// elsewhere is left alone (status pending, with the reason in the message).
 PointResult run_study_point(RunStore& store, std::int64_t study_id, const Study& study, int point,
                             const PointRunControl& control);
 

@@ -7,6 +7,8 @@
 #include <omp.h>
 
 #include <random>
+#include <thread>
+#include <tuple>
 
 #include "engine_models.hpp"
 #include "pdamp/model/placement.hpp"
@@ -131,22 +133,33 @@ using test::Process;
 using test::Result;
 using test::small;
 
-/// The rows of two runs that differ (samples and cycles, every column but the run's id).
-std::int64_t differing_rows(const std::filesystem::path& db, std::int64_t a, std::int64_t b) {
+/// The rows of two runs that differ (samples and cycles, every column but the run's id):
+/// runs `a` and `b` of `db`, or run `a` of `db` and run `b` of `other`.
+std::int64_t differing_rows(const std::filesystem::path& db, std::int64_t a, std::int64_t b,
+                            const std::filesystem::path& other = {}) {
   std::int64_t differ = 0;
+  sqlite::Database d(db);
+  std::string b_in = "main.";
+  if (!other.empty()) {
+    d.exec("ATTACH '" + other.string() + "' AS other");
+    b_in = "other.";
+  }
   for (const std::string table : {"samples", "cycles"}) {
     std::string columns;
-    sqlite::Database d(db);
     sqlite::Statement names(d, "SELECT name FROM pragma_table_info(?) WHERE name != 'run_id' ORDER BY cid");
     names.bind(1, table);
     while (names.step()) columns.append(columns.empty() ? "" : ", ").append(names.column_text(0));
-    for (const auto& [x, y] : {std::pair{a, b}, std::pair{b, a}}) {
+    for (const auto& [x, x_in, y, y_in] :
+         {std::tuple{a, std::string("main."), b, b_in}, std::tuple{b, b_in, a, std::string("main.")}}) {
       // Appended piece by piece, here and above: GCC 12's LTO warns (-Wstringop-overflow, a
       // false positive) on operator+ of these strings.
-      const std::string rows_of = "SELECT " + columns + " FROM " + table + " WHERE run_id = ";
-      std::string sql = "SELECT count(*) FROM (";
-      sql.append(rows_of).append(std::to_string(x)).append(" EXCEPT ").append(rows_of).append(std::to_string(y));
-      differ += test::count_rows(db, sql.append(")"));
+      std::string sql = "SELECT count(*) FROM (SELECT ";
+      sql.append(columns).append(" FROM ").append(x_in).append(table).append(" WHERE run_id = ");
+      sql.append(std::to_string(x)).append(" EXCEPT SELECT ").append(columns).append(" FROM ").append(y_in);
+      sql.append(table).append(" WHERE run_id = ").append(std::to_string(y)).append(")");
+      sqlite::Statement q(d, sql);
+      q.step();
+      differ += q.column_int(0);
     }
   }
   return differ;
@@ -263,4 +276,74 @@ TEST_CASE(
   CHECK(runs.out.find("running on elsewhere") != std::string::npos);
   d.exec("UPDATE runs SET lease_host = '" + me.host + "', lease_pid = 4000000000 WHERE run_id = 1");
   CHECK(store.summary(1)->status == "dead");
+}
+
+namespace {
+
+/// How many rows of a comparison's tables differ between comparison 1 of two stores (bit
+/// for bit in every column but the ids, the creation time and the wall times), or are in
+/// one only.
+std::int64_t comparison_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
+  sqlite::Database d(a);
+  d.exec("ATTACH '" + b.string() + "' AS b");
+  // `same`: the columns that pair the rows of a comparison.
+  auto differing = [&](const std::string& table, const std::string& same, std::initializer_list<const char*> columns) {
+    std::string differs = "y.comparison_id IS NULL";
+    for (const char* column : columns) differs += std::string(" OR x.") + column + " IS NOT y." + column;
+    sqlite::Statement q(d, "SELECT coalesce(sum(" + differs + "), 0) + abs(count(*) - (SELECT count(*) FROM b." +
+                               table + ")) FROM main." + table + " x LEFT JOIN b." + table +
+                               " y ON y.comparison_id = x.comparison_id AND " + same);
+    q.step();
+    return q.column_int(0);
+  };
+  return differing("comparisons", "1",
+                   {"scenario_name", "soft_run_id", "hard_run_id", "initial_state_id", "hard_restitution",
+                    "envelope_max_rel_diff", "envelope_rms_rel_diff", "small_amplitude_freq_soft_hz",
+                    "small_amplitude_freq_hard_hz", "gamma_below_1_soft_s", "gamma_below_1_hard_s", "psi_mean_abs_diff",
+                    "dissipated_soft_J", "dissipated_hard_J", "dissipated_rel_diff", "soft_steps", "hard_events"}) +
+         differing("comparison_psi_bins", "y.gamma_low = x.gamma_low",
+                   {"gamma_high", "psi_soft", "psi_hard", "cycles_soft", "cycles_hard"}) +
+         differing("comparison_energy", "y.t_s = x.t_s AND y.model = x.model", {"impact_J", "friction_J", "viscous_J"});
+}
+
+}  // namespace
+
+TEST_CASE("pdamp resume of a killed comparison's run completes it: the same rows as pdamp compare uninterrupted") {
+  for (const std::string killed_in : {"soft", "hard"}) {
+    CAPTURE(killed_in);
+    test::TempDir dir("checkpoint-compare-" + killed_in);
+    const auto reference = dir / "reference.sqlite", db = dir / "runs.sqlite";
+    auto compare = [&](const std::filesystem::path& store) {
+      return std::vector<std::string>{"compare",      "--scenario",         small(), "--duration", "1", "--db",
+                                      store.string(), "--checkpoint-every", "0.05"};
+    };
+    REQUIRE(pdamp_cli(compare(reference), dir).code == 0);
+    // Killed once its soft (or hard) run has a checkpoint: soft about 2 s of wall time, hard 0.6 s.
+    Process killed(compare(db), dir);
+    const std::string checkpointed = "SELECT count(*) FROM run_checkpoints JOIN runs USING (run_id) WHERE model = '" +
+                                     killed_in + "' AND status = 'running'";
+    for (int i = 0; i < 20000 && !(std::filesystem::exists(db) && test::count_rows(db, checkpointed) > 0); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    killed.signal(SIGKILL);
+    killed.wait();
+    const std::int64_t run_id = test::count_rows(db, "SELECT max(run_id) FROM runs");
+    REQUIRE(test::count_rows(db, "SELECT count(*) FROM runs WHERE status = 'running'") == 1);
+    CHECK(test::count_rows(db, "SELECT count(*) FROM comparisons") == 0);
+    CHECK(test::count_rows(db, "SELECT count(*) FROM comparison_runs") == 1);
+
+    const Result until = pdamp_cli({"resume", std::to_string(run_id), "--until", "2", "--db", db.string()}, dir);
+    CHECK(until.code == 2);
+    CHECK(until.err.find("is a run of a comparison under way (pdamp compare, soft run 1): resuming it completes the "
+                         "comparison") != std::string::npos);
+    const Result resumed = pdamp_cli({"resume", std::to_string(run_id), "--db", db.string()}, dir);
+    INFO(resumed.err);
+    REQUIRE(resumed.code == 0);
+    CHECK(resumed.out.find(", soft run 1, hard run 2, hard restitution") != std::string::npos);
+    CHECK(test::count_rows(db, "SELECT count(*) FROM runs") == 2);
+    CHECK(test::count_rows(db, "SELECT count(*) FROM comparison_runs") == 0);
+    CHECK(differing_rows(reference, 1, 1, db) == 0);
+    CHECK(differing_rows(reference, 2, 2, db) == 0);
+    CHECK(comparison_differences(reference, db) == 0);
+  }
 }

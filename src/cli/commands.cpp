@@ -174,6 +174,16 @@ int resume_command(const std::string& run_id_text, std::optional<double> until_s
                    bool terminal, std::chrono::milliseconds checkpoint_interval) {
   const std::int64_t run_id = parse_run_id(run_id_text);
   RunStore store(db, StoreAccess::modify);
+  if (const auto comparison = store.comparison_runs(run_id)) {
+    if (until_s) {
+      throw InputError("run " + std::to_string(run_id) +
+                       " is a run of a comparison under way (pdamp compare, soft run " +
+                       std::to_string(comparison->soft_run_id) +
+                       "): resuming it completes the comparison, to the runs' duration; --until is for a run of "
+                       "its own");
+    }
+    return complete_comparison(store, *comparison, terminal, checkpoint_interval);
+  }
   install_stop_handlers();
   Progress progress(std::cerr, terminal);
   RunControl control;
@@ -226,6 +236,30 @@ void print_comparison(RunStore& store, std::int64_t id, const ComparisonRecord& 
 
 }  // namespace
 
+namespace {
+
+/// The end of one of a comparison's runs: its snapshots named; the exit code if it did not
+/// complete (then the comparison stops there, to be completed by pdamp resume).
+std::optional<int> comparison_run_ended(RunStore& store, const StoredRun& run, Progress& progress) {
+  progress.end();
+  if (const auto written = store.snapshots(run.run_id)) {
+    progress.message("pdamp: " + std::to_string(written->frames) + " snapshots of run " + std::to_string(run.run_id) +
+                     ": " + printable(written->collection));
+  }
+  if (run.outcome.status == RunStatus::completed) return std::nullopt;
+  print_summary(store, run.run_id, std::cout);
+  return exit_code(run);
+}
+
+int store_and_print_comparison(RunStore& store, const Scenario& scenario, std::optional<std::int64_t> bed_state_id,
+                               const std::int64_t (&run_ids)[2]) {
+  const auto [id, comparison] = store_comparison(store, scenario, bed_state_id, run_ids[0], run_ids[1]);
+  print_comparison(store, id, comparison, std::cout);
+  return 0;
+}
+
+}  // namespace
+
 int compare_command(const ScenarioRequest& request, const std::filesystem::path& db,
                     const std::optional<SnapshotSettings>& snapshots, bool terminal,
                     std::chrono::milliseconds checkpoint_interval) {
@@ -240,22 +274,61 @@ int compare_command(const ScenarioRequest& request, const std::filesystem::path&
   for (const RunPlan& plan : plans) {
     const std::string label = std::string(to_string(plan.engine.model)) + " model";
     progress.message("pdamp: " + label);
-    const StoredRun run = run_and_store(
-        store, plan, bed.source(), run_control(scenario, progress, label, checkpoint_interval), warnings_to(progress));
-    progress.end();
-    run_ids[plan.engine.model == Model::hard] = run.run_id;
-    if (const auto written = store.snapshots(run.run_id)) {
-      progress.message("pdamp: " + std::to_string(written->frames) + " snapshots of run " + std::to_string(run.run_id) +
-                       ": " + printable(written->collection));
-    }
-    if (run.outcome.status != RunStatus::completed) {
-      print_summary(store, run.run_id, std::cout);
-      return exit_code(run);
-    }
+    const bool hard = plan.engine.model == Model::hard;
+    // Recorded as they begin, so that pdamp resume can complete the comparison.
+    const auto begun = [&](std::int64_t run_id) {
+      run_ids[hard] = run_id;
+      store.save_comparison_runs(run_ids[0], hard ? std::optional(run_id) : std::nullopt);
+    };
+    const StoredRun run =
+        run_and_store(store, plan, bed.source(), run_control(scenario, progress, label, checkpoint_interval),
+                      warnings_to(progress), begun);
+    if (const auto code = comparison_run_ended(store, run, progress)) return *code;
   }
-  const auto [id, comparison] = store_comparison(store, scenario, bed.source()().state_id, run_ids[0], run_ids[1]);
-  print_comparison(store, id, comparison, std::cout);
-  return 0;
+  return store_and_print_comparison(store, scenario, bed.source()().state_id, run_ids);
+}
+
+int complete_comparison(RunStore& store, const ComparisonRuns& runs, bool terminal,
+                        std::chrono::milliseconds checkpoint_interval) {
+  const Scenario scenario =
+      parse_scenario(runs.scenario_text, runs.scenario_name, "run " + std::to_string(runs.soft_run_id) + "'s scenario");
+  std::int64_t run_ids[2] = {runs.soft_run_id, runs.hard_run_id.value_or(0)};
+  // Every refusal before anything changes: each run not completed must be resumable.
+  auto completed = [&](std::int64_t run_id) { return store.summary(run_id)->status == "completed"; };
+  for (const std::int64_t run_id : run_ids) {
+    if (run_id != 0 && !completed(run_id)) store.resumable_run(run_id, std::nullopt);
+  }
+  // A hard run not begun starts from the soft run's bed, with its snapshot settings.
+  std::optional<RunPlan> hard_plan;
+  if (!runs.hard_run_id) {
+    std::optional<SnapshotSettings> snapshots;
+    if (const auto taken = store.snapshots(runs.soft_run_id)) {
+      snapshots = SnapshotSettings{taken->interval_s, std::filesystem::path(taken->folder).parent_path()};
+    }
+    hard_plan = plan_run(Model::hard, scenario, snapshots);
+  }
+  const InitialBed bed{runs.initial_state_id ? store.load_initial_particles(*runs.initial_state_id) : Particles(0),
+                       runs.initial_state_id, true, 0.0};
+
+  install_stop_handlers();
+  Progress progress(std::cerr, terminal);
+  for (const Model model : {Model::soft, Model::hard}) {
+    std::int64_t& run_id = run_ids[model == Model::hard];
+    if (run_id != 0 && completed(run_id)) continue;
+    const std::string label = std::string(to_string(model)) + " model";
+    progress.message("pdamp: " + label + (run_id != 0 ? ", run " + std::to_string(run_id) + " resumed" : ""));
+    const RunControl control = run_control(scenario, progress, label, checkpoint_interval);
+    const StoredRun run =
+        run_id != 0 ? resume_and_store(store, run_id, std::nullopt, control, warnings_to(progress))
+                    : run_and_store(
+                          store, *hard_plan, [&]() -> const InitialBed& { return bed; }, control, warnings_to(progress),
+                          [&](std::int64_t begun) {
+                            run_id = begun;
+                            store.save_comparison_runs(runs.soft_run_id, begun);
+                          });
+    if (const auto code = comparison_run_ended(store, run, progress)) return *code;
+  }
+  return store_and_print_comparison(store, scenario, runs.initial_state_id, run_ids);
 }
 
 int stop_signal_received() { return stop_signal.load(); }

@@ -11,6 +11,7 @@
 
 #include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/sim/snapshots.hpp"
+#include "pdamp/store/run_store.hpp"
 
 namespace pdamp {
 
@@ -36,6 +37,12 @@ int check_command(const ScenarioRequest& request);
 int compare_command(const ScenarioRequest& request, const std::filesystem::path& db,
                     const std::optional<SnapshotSettings>& snapshots, bool terminal,
                     std::chrono::milliseconds checkpoint_interval);
+/// Completes a comparison under way that was stopped or killed (pdamp resume of one of its
+/// runs): each run not completed resumed from its checkpoint, or the hard run started
+/// from the soft run's bed if it had not begun, then the comparison stored as pdamp
+/// compare stores it. Throws InputError, changing nothing, if a run cannot be resumed.
+int complete_comparison(RunStore& store, const ComparisonRuns& runs, bool terminal,
+                        std::chrono::milliseconds checkpoint_interval);
 /// Sets the number of threads (--threads); throws InputError unless it is 1 to 1024.
 void set_thread_count(const std::string& text);
 

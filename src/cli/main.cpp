@@ -35,7 +35,7 @@ constexpr const char* usage =
     "          simulate a scenario and store the run (and snapshots for ParaView)\n"
     "  resume  RUN_ID [--until T] [--db FILE]\n"
     "          continue an interrupted or killed run from its checkpoint (or extend a completed one to T),\n"
-    "          with its snapshots if it takes any\n"
+    "          with its snapshots if it takes any; a killed comparison's run completes the comparison\n"
     "  runs    [--db FILE]            list the stored runs\n"
     "  show    RUN_ID [--db FILE]     summary of one run\n"
     "  delete  RUN_ID... [--db FILE] [--force]\n"

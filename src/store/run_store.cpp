@@ -404,6 +404,31 @@ EngineStatistics RunStore::statistics(std::int64_t run_id) {
   return result;
 }
 
+void RunStore::save_comparison_runs(std::int64_t soft_run_id, std::optional<std::int64_t> hard_run_id) {
+  sqlite::write_transaction(*db_, [&] {
+    sqlite::Statement row(*db_,
+                          "INSERT INTO comparison_runs (soft_run_id, hard_run_id) VALUES (?, ?) "
+                          "ON CONFLICT (soft_run_id) DO UPDATE SET hard_run_id = excluded.hard_run_id");
+    row.bind(1, soft_run_id).bind(2, hard_run_id).run();
+  });
+}
+
+std::optional<ComparisonRuns> RunStore::comparison_runs(std::int64_t run_id) {
+  sqlite::Statement q(*db_,
+                      "SELECT c.soft_run_id, c.hard_run_id, r.scenario_name, r.scenario_text, r.initial_state_id "
+                      "FROM comparison_runs c JOIN runs r ON r.run_id = c.soft_run_id "
+                      "WHERE c.soft_run_id = ?1 OR c.hard_run_id = ?1");
+  q.bind(1, run_id);
+  if (!q.step()) return std::nullopt;
+  ComparisonRuns runs;
+  runs.soft_run_id = q.column_int(0);
+  if (!q.is_null(1)) runs.hard_run_id = q.column_int(1);
+  runs.scenario_name = q.column_text(2);
+  runs.scenario_text = q.column_text(3);
+  if (!q.is_null(4)) runs.initial_state_id = q.column_int(4);
+  return runs;
+}
+
 std::int64_t RunStore::save_comparison(const ComparisonRecord& c) {
   return sqlite::write_transaction(*db_, [&] {
     sqlite::Statement row(*db_,
@@ -433,6 +458,8 @@ std::int64_t RunStore::save_comparison(const ComparisonRecord& c) {
         .bind(21, c.hard_events);
     row.run();
     const std::int64_t id = db_->last_insert_rowid();
+    sqlite::Statement under_way(*db_, "DELETE FROM comparison_runs WHERE soft_run_id = ?");
+    under_way.bind(1, c.soft_run_id).run();
     sqlite::Statement bin(*db_,
                           "INSERT INTO comparison_psi_bins (comparison_id, gamma_low, gamma_high, psi_soft, psi_hard, "
                           "cycles_soft, cycles_hard) VALUES (?, ?, ?, ?, ?, ?, ?)");

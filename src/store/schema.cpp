@@ -607,10 +607,19 @@ FROM study_points p JOIN study_characterise_points c ON c.study_id = p.study_id 
 LEFT JOIN study_characterise_metrics m ON m.study_id = p.study_id AND m.point = p.point;
 )sql";
 
-constexpr std::array<std::string_view, 13> all{
-    v1_runs_samples_cycles,  v2_run_statistics,   v3_initial_states,   v4_comparisons, v5_solid_fraction,
-    v6_run_ids_never_reused, v7_run_snapshots,    v8_studies,          v9_study_jobs,  v10_run_checkpoints,
-    v11_frf_studies,         v12_engine_counters, v13_characterisation};
+/// The runs of a `pdamp compare` under way, until its comparison is stored: what `pdamp
+/// resume` needs to complete a comparison that was stopped or killed.
+constexpr std::string_view v14_comparison_runs = R"sql(
+CREATE TABLE comparison_runs (
+  soft_run_id  INTEGER PRIMARY KEY REFERENCES runs (run_id) ON DELETE CASCADE,
+  hard_run_id  INTEGER UNIQUE REFERENCES runs (run_id) ON DELETE CASCADE  -- NULL until the hard run begins
+) STRICT;
+)sql";
+
+constexpr std::array<std::string_view, 14> all{
+    v1_runs_samples_cycles,  v2_run_statistics,   v3_initial_states,    v4_comparisons,     v5_solid_fraction,
+    v6_run_ids_never_reused, v7_run_snapshots,    v8_studies,           v9_study_jobs,      v10_run_checkpoints,
+    v11_frf_studies,         v12_engine_counters, v13_characterisation, v14_comparison_runs};
 
 }  // namespace
 

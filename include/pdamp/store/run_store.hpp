@@ -131,6 +131,15 @@ struct ComparisonRecord {
   std::vector<Energy> energy;
 };
 
+/// A `pdamp compare` under way (comparison_runs), until its comparison is stored: its
+/// runs, and what both run.
+struct ComparisonRuns {
+  std::int64_t soft_run_id = 0;
+  std::optional<std::int64_t> hard_run_id;       ///< empty until the hard run begins
+  std::string scenario_name, scenario_text;      ///< the soft run's
+  std::optional<std::int64_t> initial_state_id;  ///< the bed both start from, once settled
+};
+
 /// What the store holds of one run's results, in time order: the input of the comparison
 /// (compare/comparison.hpp). A sample's ledger is read back with host_counts true (the
 /// store keeps the energies, not whether the host's count in E).
@@ -219,7 +228,12 @@ class RunStore {
                                   double kinetic_J, double wall_time_s);
   Particles load_initial_particles(std::int64_t state_id);
 
+  /// Stores a comparison, and ends its runs' comparison_runs row in the same transaction.
   std::int64_t save_comparison(const ComparisonRecord& comparison);
+  /// Records the runs of a comparison under way: the soft run as it begins, then its hard run.
+  void save_comparison_runs(std::int64_t soft_run_id, std::optional<std::int64_t> hard_run_id = {});
+  /// The comparison under way that `run_id` is a run of, if any.
+  std::optional<ComparisonRuns> comparison_runs(std::int64_t run_id);
   /// A run's samples and cycles; throws InputError for a run not in the store.
   RunResults results(std::int64_t run_id);
 

@@ -184,8 +184,10 @@ inline std::string unfinished_checkpointed_run_ids(const std::filesystem::path& 
   sqlite::Database d(db);
   sqlite::Statement q(d, "SELECT run_id FROM run_checkpoints JOIN runs USING (run_id) WHERE status <> 'completed'");
   std::string list;
-  while (q.step()) list += (list.empty() ? "" : ", ") + std::to_string(q.column_int(0));
-  return "(" + list + ")";
+  // Appended piece by piece: GCC 12's LTO warns (-Wstringop-overflow, a false positive) on
+  // operator+ here.
+  while (q.step()) list.append(list.empty() ? "" : ", ").append(std::to_string(q.column_int(0)));
+  return list.insert(0, "(").append(")");
 }
 
 /// How many of the runs `ids` (an SQL list) are completed and linked to their point's

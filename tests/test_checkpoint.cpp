@@ -322,7 +322,13 @@ TEST_CASE("pdamp resume of a killed comparison's run completes it: the same rows
     Process killed(compare(db), dir);
     const std::string checkpointed = "SELECT count(*) FROM run_checkpoints JOIN runs USING (run_id) WHERE model = '" +
                                      killed_in + "' AND status = 'running'";
-    for (int i = 0; i < 20000 && !(std::filesystem::exists(db) && test::count_rows(db, checkpointed) > 0); ++i) {
+    // The store's tables exist once its newest does (comparison_runs, migration 14).
+    auto ready = [&] {
+      return std::filesystem::exists(db) &&
+             test::count_rows(db, "SELECT count(*) FROM sqlite_schema WHERE name = 'comparison_runs'") > 0 &&
+             test::count_rows(db, checkpointed) > 0;
+    };
+    for (int i = 0; i < 20000 && !ready(); ++i) {
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     killed.signal(SIGKILL);

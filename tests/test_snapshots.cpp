@@ -360,7 +360,9 @@ TEST_CASE("pdamp resume continues a killed run's snapshots: the same files, byte
     CAPTURE(model);
     test::TempDir dir("snapshots-resume-" + model);
     const auto db = dir / "runs.sqlite", frames = dir / "frames";
-    const std::string duration = model == "soft" ? "0.5" : "1.5";  // about a second of wall time each
+    // Seconds of wall time each on a quiet machine, several times the 0.4 s after which
+    // the kill below comes, so that the run cannot end first.
+    const std::string duration = model == "soft" ? "1.0" : "6";
     auto run_args = [&](const std::string& every) {
       return std::vector<std::string>{"run",
                                       "--scenario",

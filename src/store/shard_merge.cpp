@@ -38,9 +38,9 @@ constexpr std::array<std::string_view, 19> merged{"initial_states",
                                                   "study_tasks"};
 // The points' places on their curves are the study's definition, which the store holds.
 // A shard's comparisons are its points' (study_point_runs), never a `pdamp compare` under way.
-constexpr std::array<std::string_view, 7> unmerged{"studies",          "study_point_values", "study_jobs",
-                                                   "comparison_runs",  "sqlite_sequence",    "study_frf_points",
-                                                   "study_characterise_points"};
+constexpr std::array<std::string_view, 7> unmerged{
+    "studies",          "study_point_values",       "study_jobs", "comparison_runs", "sqlite_sequence",
+    "study_frf_points", "study_characterise_points"};
 
 /// A shard's ids and their new ids in the store.
 using IdMap = std::map<std::int64_t, std::int64_t>;

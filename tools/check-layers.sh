@@ -3,8 +3,9 @@
 # docs/architecture.md: a folder may include its own headers, the top-level
 # include/pdamp/*.hpp, and the layers its row's last column names ("1–4, 6": numbers and
 # ranges, "—" for none). A folder that is not in the table is an error too, so that the
-# table stays complete. A library's internal headers (src/soft/lanes.hpp, included as
-# "soft/lanes.hpp") may be included only by its own sources, never by a public header.
+# table stays complete. Internal headers (src/soft/neighbour_list.hpp, included as
+# "soft/neighbour_list.hpp") follow the same table and are never included by a public
+# header; which libraries see src/ at all is CMake's (src/CMakeLists.txt).
 #
 # Usage: tools/check-layers.sh
 # Prints each include that breaks the rule (file:line). Exit 0 if none, 1 otherwise, 2 if
@@ -53,30 +54,27 @@ for top in "$root/include/pdamp" "$root/src"; do
       continue
     fi
     while IFS=: read -r file line text; do
-      included=$(sed -E 's/.*#include "pdamp\/([^"]*)".*/\1/' <<<"$text")
-      [[ $included == */* ]] || continue  # a top-level header
+      shown=$(sed -E 's/.*#include "([^"]*)".*/\1/' <<<"$text")
+      included=${shown#pdamp/}
+      if [[ $shown == pdamp/* ]]; then
+        [[ $included == */* ]] || continue  # a top-level header
+      elif [ "$top" = "$root/include/pdamp" ]; then
+        echo "${file#"$root"/}:$line: a public header includes $shown, an internal header of src/"
+        broken=1
+        continue
+      fi
       target=${included%%/*}
       [ "$target" = "$folder" ] && continue
       if [ -z "${layer[$target]:-}" ]; then
-        echo "${file#"$root"/}:$line: includes pdamp/$included, whose folder '$target' is not in the table of layers"
+        echo "${file#"$root"/}:$line: includes $shown, whose folder '$target' is not in the table of layers"
         broken=1
       elif [[ ${allowed[$folder]} != *" ${layer[$target]} "* ]]; then
         may=${allowed[$folder]# }
-        echo "${file#"$root"/}:$line: $folder (layer ${layer[$folder]}) includes pdamp/$included (layer" \
+        echo "${file#"$root"/}:$line: $folder (layer ${layer[$folder]}) includes $shown (layer" \
           "${layer[$target]}, $target); it may include ${may:+layers }${may:-no other layer}"
         broken=1
       fi
-    done < <(grep -rn '#include "pdamp/' "$dir" || true)
-    while IFS=: read -r file line text; do
-      included=$(sed -E 's/.*#include "([^"]*)".*/\1/' <<<"$text")
-      if [ "$top" = "$root/include/pdamp" ]; then
-        echo "${file#"$root"/}:$line: a public header includes $included, an internal header of src/"
-        broken=1
-      elif [ "${included%%/*}" != "$folder" ]; then
-        echo "${file#"$root"/}:$line: $folder includes $included, an internal header of src/${included%%/*}"
-        broken=1
-      fi
-    done < <(grep -rnE '#include "[a-z_]+/' "$dir" | grep -v '#include "pdamp/' || true)
+    done < <(grep -rnE '#include "[a-z_]+/' "$dir" || true)
   done
 done
 exit "$broken"

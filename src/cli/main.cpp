@@ -95,7 +95,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
         "threads", po::value<std::string>(),
         "threads for the soft engine (default: one per core); results are the same bits for any number")(
         "simd", po::value<std::string>(),
-        "the soft engine's instruction set, sse2, avx2 or avx512 (default: the widest this CPU runs); results are the "
+        "both engines' instruction set, sse2, avx2 or avx512 (default: the widest this CPU runs); results are the "
         "same bits on each")("diagnose-events",
                              "hard model: count where the collisions come from (the time between a sphere's "
                              "collisions against the soft law's contact time, the approach speeds) into the run's "

@@ -17,6 +17,7 @@
 #include <limits>
 
 #include "pdamp/model/host.hpp"
+#include "simd/lanes.hpp"
 
 namespace pdamp::hard {
 
@@ -26,18 +27,11 @@ inline constexpr double never = std::numeric_limits<double>::infinity();
 /// the same instant (m/s).
 inline constexpr double min_approach_speed_m_s = 1e-12;
 
-/// Two doubles side by side in one SSE2 register (a GCC vector extension); each lane
-/// rounds exactly as a double would.
-using Lanes2 = double __attribute__((vector_size(2 * sizeof(double))));
-/// What comparing Lanes2 gives: all ones in the lanes where it holds.
-using Mask2 = decltype(Lanes2{} < Lanes2{});
-inline double sqrt_lanes(double a) { return std::sqrt(a); }
-inline Lanes2 sqrt_lanes(Lanes2 a) { return Lanes2{std::sqrt(a[0]), std::sqrt(a[1])}; }  // one sqrtpd
-/// `mask ? a : b`, lane by lane, without branches (GCC may branch on a vector ?: lane by lane).
-inline double select(bool mask, double a, double b) { return mask ? a : b; }
-inline Lanes2 select(Mask2 mask, Lanes2 a, Lanes2 b) {
-  return reinterpret_cast<Lanes2>((reinterpret_cast<Mask2>(a) & mask) | (reinterpret_cast<Mask2>(b) & ~mask));
-}
+/// Two doubles side by side in one SSE2 register, from the lanes both engines share; each
+/// lane rounds exactly as a double would. The predictions below run on the baseline's two
+/// lanes whatever SimdPath is chosen.
+using simd::Lanes2;
+using simd::Mask2;
 
 /// A sphere's free flight from (x0, v0) at t0 under gravity g.
 struct Ballistic {
@@ -60,14 +54,14 @@ struct Ballistic {
 template <class Real>
 [[gnu::always_inline]] inline Real time_to_close(Real gap, Real rate, Real accel) {
   const Real zero{};
-  gap = select(gap < 0.0, zero, gap);
+  gap = simd::blend(gap < 0.0, zero, gap);
   const Real discriminant = rate * rate - 2.0 * accel * gap;
-  const Real root = sqrt_lanes(select(discriminant < 0.0, zero, discriminant));
+  const Real root = simd::sqrt_of(simd::blend(discriminant < 0.0, zero, discriminant));
   const Real closing = 2.0 * gap / (root - rate);  // the smaller root, without cancellation
   const Real opening = (rate + root) / -accel;     // moving away, turned back by accel < 0
   const auto approaching = rate < 0.0;
   const auto misses = (approaching & (discriminant < 0.0)) | ((rate >= 0.0) & (accel >= 0.0));
-  return select(misses, zero + never, select(approaching, closing, opening));
+  return simd::blend(misses, zero + never, simd::blend(approaching, closing, opening));
 }
 
 /// time_to_close lane by lane, to the bit, but by one division where no lane accelerates
@@ -78,9 +72,9 @@ template <class Real>
   if ((accel[0] != 0.0) | (accel[1] != 0.0)) return time_to_close(gap, rate, accel);
   const Lanes2 zero{};
   const auto approaching = rate < 0.0;
-  gap = select(gap < 0.0, zero, gap);
-  const Lanes2 time = gap / select(approaching, -rate, zero + 1.0);  // no 0/0 where it stays
-  return select(approaching, time, zero + never);
+  gap = simd::blend(gap < 0.0, zero, gap);
+  const Lanes2 time = gap / simd::blend(approaching, -rate, zero + 1.0);  // no 0/0 where it stays
+  return simd::blend(approaching, time, zero + never);
 }
 
 /// The first s ≥ 0 at which a point between two planes per lane, `lower_gap` above the
@@ -101,11 +95,11 @@ struct FaceTimes {
   const Lanes2 zero{}, none = zero + never;
   const auto falling = rate < 0.0;
   const auto rising = rate > 0.0;
-  Lanes2 gap = select(falling, lower_gap, upper_gap);
-  gap = select(gap < 0.0, zero, gap);
-  const Lanes2 speed = select(falling, -rate, rate);
-  const Lanes2 time = gap / select(falling | rising, speed, zero + 1.0);  // no 0/0 where it stays
-  return {select(falling, time, none), select(rising, time, none)};
+  Lanes2 gap = simd::blend(falling, lower_gap, upper_gap);
+  gap = simd::blend(gap < 0.0, zero, gap);
+  const Lanes2 speed = simd::blend(falling, -rate, rate);
+  const Lanes2 time = gap / simd::blend(falling | rising, speed, zero + 1.0);  // no 0/0 where it stays
+  return {simd::blend(falling, time, none), simd::blend(rising, time, none)};
 }
 
 /// The contact test of two spheres whose centres are dx = x_i − x_j apart and move with

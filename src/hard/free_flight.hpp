@@ -173,6 +173,8 @@ class FreeFlight {
   /// Whether a sphere–sphere collision asks for the cells around both spheres before it
   /// predicts them: likewise only where the cells outgrow half the L2 cache.
   bool prefetch_cells_ = false;
+  /// The neighbour screen of the process's SimdPath; after predict's members, as above.
+  NeighbourScreen screen_ = neighbour_screen(simd::default_simd_path());
 };
 
 inline bool FreeFlight::is_current(const Event& e, const std::uint32_t& host_epoch) const {
@@ -243,7 +245,7 @@ inline bool FreeFlight::predict(int i, std::span<const int> new_cells, double t,
   if (prefetch_records_) {
     for (int k = 0; k < candidate_count; ++k) __builtin_prefetch(&particles_.record(candidates[k]));
   }
-  screen_neighbours({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count, screen_result_);
+  screen_({x, v, r, t, i}, g, &particles_.record(0), candidates, candidate_count, screen_result_);
   screen_result_.for_each_met(candidate_count, [&](int k, const PairQuadratic& pair) {
     const int j = candidates[k];
     push({t + pair.time_s(), i, j, trajectory_counter_[j], EventKind::sphere_sphere});

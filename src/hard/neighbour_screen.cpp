@@ -1,9 +1,6 @@
 #include "hard/neighbour_screen.hpp"
 
-#include <immintrin.h>
-
 #include <cstring>
-#include <string_view>
 
 // Vectors are passed by value only into the always_inline helpers below, inlined at
 // every optimisation level: GCC's note that their ABI differs without AVX concerns no call.
@@ -22,45 +19,32 @@ struct ScreenAccess {
 namespace {
 
 constexpr int width = screen_width;
-using Lanes = double __attribute__((vector_size(width * sizeof(double))));
-using Mask = decltype(Lanes{} < Lanes{});
-
-[[gnu::always_inline]] inline Lanes splat(double a) { return Lanes{a, a, a, a}; }
-
-[[gnu::always_inline]] inline Lanes load(const double* from) {
-  Lanes lanes;
-  std::memcpy(&lanes, from, sizeof lanes);
-  return lanes;
-}
-[[gnu::always_inline]] inline void store(double* to, Lanes lanes) { std::memcpy(to, &lanes, sizeof lanes); }
+using Lanes = simd::Lanes4;
+using Mask = simd::Mask4;
 
 /// The eight doubles of four records as eight vectors: x, y, z, t_ref, vx, vy, vz, radius.
 [[gnu::always_inline]] inline void transpose(const FlightRecord* const (&record)[width], Lanes (&field)[8]) {
   for (int half = 0; half < 2; ++half) {  // x y z t_ref, then vx vy vz radius
-    const Lanes r0 = load(&record[0]->x_m + 4 * half), r1 = load(&record[1]->x_m + 4 * half);
-    const Lanes r2 = load(&record[2]->x_m + 4 * half), r3 = load(&record[3]->x_m + 4 * half);
-    const Lanes even01 = __builtin_shufflevector(r0, r1, 0, 4, 2, 6),
-                odd01 = __builtin_shufflevector(r0, r1, 1, 5, 3, 7);
-    const Lanes even23 = __builtin_shufflevector(r2, r3, 0, 4, 2, 6),
-                odd23 = __builtin_shufflevector(r2, r3, 1, 5, 3, 7);
-    field[4 * half + 0] = __builtin_shufflevector(even01, even23, 0, 1, 4, 5);
-    field[4 * half + 1] = __builtin_shufflevector(odd01, odd23, 0, 1, 4, 5);
-    field[4 * half + 2] = __builtin_shufflevector(even01, even23, 2, 3, 6, 7);
-    field[4 * half + 3] = __builtin_shufflevector(odd01, odd23, 2, 3, 6, 7);
+    Lanes r0 = simd::load<Lanes>(&record[0]->x_m + 4 * half), r1 = simd::load<Lanes>(&record[1]->x_m + 4 * half);
+    Lanes r2 = simd::load<Lanes>(&record[2]->x_m + 4 * half), r3 = simd::load<Lanes>(&record[3]->x_m + 4 * half);
+    simd::transpose(r0, r1, r2, r3);
+    field[4 * half + 0] = r0;
+    field[4 * half + 1] = r1;
+    field[4 * half + 2] = r2;
+    field[4 * half + 3] = r3;
   }
 }
 
-/// One bit per lane where the mask is set: AVX2 has an instruction for it. The mask
-/// comes by reference: the generic screen is not always inlined into the entry points
-/// below (`flatten` may not, unoptimised), and a vector passed in registers between
-/// code compiled for different instruction sets would arrive garbled.
+/// One bit per lane where the mask is set: AVX2 has an instruction for it
+/// (simd::lane_bits). The mask comes by reference: the generic screen is not always
+/// inlined into the entry points below (`flatten` may not, unoptimised), and a vector
+/// passed in registers between code compiled for different instruction sets would arrive
+/// garbled.
 struct BitsSse2 {
   static unsigned of(const Mask& m) { return static_cast<unsigned>((m[0] & 1) | (m[1] & 2) | (m[2] & 4) | (m[3] & 8)); }
 };
 struct BitsAvx2 {
-  [[gnu::target("avx2")]] static unsigned of(const Mask& m) {
-    return static_cast<unsigned>(_mm256_movemask_pd(reinterpret_cast<__m256d>(m)));
-  }
+  [[gnu::target("avx2")]] static unsigned of(const Mask& m) { return simd::lane_bits(m); }
 };
 
 /// The screen, written once; each instruction set below compiles its own copy. It keeps
@@ -71,6 +55,7 @@ void screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const Flight
             int count, ScreenResult& result) {
   for (int k = 0; k < width; ++k) neighbours[count + k] = sphere.index;  // pads: never meets itself
   const int padded = (count + width - 1) / width * width;
+  auto splat = [](double a) { return simd::broadcast<Lanes>(a); };
   const Lanes t = splat(sphere.t_s), r = splat(sphere.radius_m);
   const Lanes x = splat(sphere.position_m.x()), y = splat(sphere.position_m.y()), z = splat(sphere.position_m.z());
   const Lanes vx = splat(sphere.velocity_m_s.x()), vy = splat(sphere.velocity_m_s.y()),
@@ -97,9 +82,9 @@ void screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const Flight
     const Lanes c = ((dx * dx + dy * dy) + dz * dz) - contact * contact;
     const Lanes discriminant = b * b - ((dvx * dvx + dvy * dvy) + dvz * dvz) * c;
     const auto meets = (b < -min_approach_speed_m_s * contact) & ((c <= 0.0) | (discriminant >= 0.0));
-    store(b_out + first, b);
-    store(c_out + first, c);
-    store(discriminant_out + first, discriminant);
+    simd::store(b_out + first, b);
+    simd::store(c_out + first, c);
+    simd::store(discriminant_out + first, discriminant);
     meets_bits[first / 64] |= static_cast<std::uint64_t>(Bits::of(meets)) << (first % 64);
   }
 }
@@ -115,52 +100,11 @@ void screen(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const Flight
   screen<BitsAvx2>(sphere, g, records, neighbours, count, result);
 }
 
-using Screen = void (*)(const ScreenedSphere&, const Eigen::Vector3d&, const FlightRecord*, int*, int, ScreenResult&);
-
-struct InstructionSet {
-  const char* name;
-  Screen screen;
-  bool available;
-};
-
-/// Fastest first.
-const InstructionSet* instruction_sets() {
-  static const InstructionSet sets[] = {
-      {"avx2", screen_avx2, static_cast<bool>(__builtin_cpu_supports("avx2"))},
-      {"sse2", screen_sse2, true},
-  };
-  return sets;
-}
-
-const InstructionSet& best_instruction_set() {
-  static const InstructionSet& best = *[] {
-    const InstructionSet* set = instruction_sets();
-    while (!set->available) ++set;
-    return set;
-  }();
-  return best;
-}
-
 }  // namespace
 
-void screen_neighbours(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
-                       int* neighbours, int count, ScreenResult& result) {
-  best_instruction_set().screen(sphere, g, records, neighbours, count, result);
-}
-
-const char* screen_instruction_set() { return best_instruction_set().name; }
-
-bool screen_neighbours_with(const char* instruction_set, const ScreenedSphere& sphere, const Eigen::Vector3d& g,
-                            const FlightRecord* records, int* neighbours, int count, ScreenResult& result) {
-  for (const InstructionSet* set = instruction_sets();; ++set) {
-    if (std::string_view(set->name) != instruction_set) {
-      if (std::string_view(set->name) == "sse2") return false;  // the last: no such set
-      continue;
-    }
-    if (!set->available) return false;
-    set->screen(sphere, g, records, neighbours, count, result);
-    return true;
-  }
+NeighbourScreen neighbour_screen(simd::SimdPath path) {
+  simd::require_available(path, "the hard engine's neighbour screen");
+  return path == simd::SimdPath::sse2 ? screen_sse2 : screen_avx2;
 }
 
 }  // namespace pdamp::hard

@@ -5,9 +5,9 @@
 /// Each lane performs the same IEEE operations in the same order as
 /// PairQuadratic::of on Ballistic::position_at and velocity_at (the project is built
 /// without floating-point contraction), so the answer is the same bits whichever
-/// instruction set runs it, chosen once at run time: AVX2, or the baseline's SSE2 (four
-/// lanes in pairs of registers). No eight-lane AVX-512 screen: the screen waits on its
-/// loads more than on its arithmetic (tools/bench/HISTORY.md).
+/// instruction set runs it, chosen by the process's SimdPath (pdamp/simd/simd_path.hpp):
+/// AVX2, or the baseline's SSE2 (four lanes in pairs of registers). No eight-lane AVX-512 screen: the screen waits on
+/// its loads more than on its arithmetic (tools/bench/HISTORY.md).
 
 #include <Eigen/Core>
 #include <bit>
@@ -16,6 +16,7 @@
 
 #include "hard/event_prediction.hpp"
 #include "hard/packed_particles.hpp"
+#include "pdamp/simd/simd_path.hpp"
 
 namespace pdamp::hard {
 
@@ -58,17 +59,13 @@ class ScreenResult {
   std::vector<std::uint64_t> meets_;
 };
 
-/// Screens `neighbours[0 … count)` (the array must have room for screen_width more)
-/// against `sphere`, under gravity `g`, into `result`.
-void screen_neighbours(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
-                       int* neighbours, int count, ScreenResult& result);
+/// A screen: screens `neighbours[0 … count)` (the array must have room for screen_width
+/// more) against `sphere`, under gravity `g`, into `result`.
+using NeighbourScreen = void (*)(const ScreenedSphere& sphere, const Eigen::Vector3d& g, const FlightRecord* records,
+                                 int* neighbours, int count, ScreenResult& result);
 
-/// The instruction set screen_neighbours uses on this processor: "avx2" or "sse2".
-const char* screen_instruction_set();
-
-/// screen_neighbours on a given instruction set (for tests: each must give the same
-/// bits); false if this processor lacks it.
-bool screen_neighbours_with(const char* instruction_set, const ScreenedSphere& sphere, const Eigen::Vector3d& g,
-                            const FlightRecord* records, int* neighbours, int count, ScreenResult& result);
+/// The screen compiled for `path`: AVX2's for AVX2 and AVX-512, SSE2's for SSE2. Every one
+/// gives the same bits. Throws InputError if this build or CPU cannot run the path.
+NeighbourScreen neighbour_screen(simd::SimdPath path);
 
 }  // namespace pdamp::hard

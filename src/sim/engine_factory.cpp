@@ -7,7 +7,7 @@
 #include "pdamp/model/host_only_engine.hpp"
 #include "pdamp/sim/calibration.hpp"
 #include "pdamp/sim/run_budget.hpp"
-#include "pdamp/soft/simd_path.hpp"
+#include "pdamp/simd/simd_path.hpp"
 #include "pdamp/soft/soft_engine.hpp"
 #include "pdamp/soft/time_step.hpp"
 
@@ -49,7 +49,7 @@ Model parse_model(std::string_view text) {
 }
 
 void set_instruction_set(std::string_view text, std::string_view option) {
-  soft::set_default_simd_path(soft::parse_simd_path(text, option), option);
+  simd::set_default_simd_path(simd::parse_simd_path(text, option), option);
 }
 
 void check_model_can_run(Model model, const Scenario& scenario) {

@@ -19,9 +19,12 @@
 /// energy balance is the integration error itself, O(Δt²).
 
 #include "pdamp/scenario/scenario.hpp"
-#include "soft/lanes.hpp"
+#include "simd/lanes.hpp"
 
 namespace pdamp::soft {
+
+// The kernels are written over the lanes both engines share.
+using namespace simd;
 
 /// What a contact remembers from one step to the next (kept for open contacts only, in a
 /// ContactTable).

@@ -20,11 +20,14 @@
 #include <vector>
 
 #include "pdamp/model/cell_grid.hpp"
+#include "simd/lanes.hpp"
 #include "soft/contact_table.hpp"
-#include "soft/lanes.hpp"
 #include "soft/sphere_arrays.hpp"
 
 namespace pdamp::soft {
+
+// The kernels are written over the lanes both engines share.
+using namespace simd;
 
 class NeighbourList {
  public:

@@ -12,7 +12,7 @@
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/host.hpp"
-#include "pdamp/soft/simd_path.hpp"
+#include "pdamp/simd/simd_path.hpp"
 #include "pdamp/soft/soft_engine.hpp"
 #include "soft/contact_law.hpp"
 #include "soft/contact_table.hpp"

@@ -54,10 +54,9 @@ std::string_view to_string(Model model);
 /// Throws InputError for a name not in engine_kinds(), naming the valid ones.
 Model parse_model(std::string_view text);
 
-/// --simd: the instruction set of the engines' kernels, "sse2", "avx2" or "avx512", for
-/// this process (the soft engine's passes; the hard engine's neighbour screen takes the
-/// widest the CPU runs, with the same bits). Throws InputError naming `option` for a set
-/// this build or CPU cannot run.
+/// --simd: the instruction set of both engines' kernels, "sse2", "avx2" or "avx512", for
+/// the engines this process makes from now on (pdamp/simd/simd_path.hpp), with the same
+/// bits on each. Throws InputError naming `option` for a set this build or CPU cannot run.
 void set_instruction_set(std::string_view text, std::string_view option);
 
 /// Checks that `model` can run the scenario (the soft engine's time

@@ -10,9 +10,11 @@
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/particles.hpp"
 #include "pdamp/scenario/scenario.hpp"
-#include "pdamp/soft/simd_path.hpp"
+#include "pdamp/simd/simd_path.hpp"
 
 namespace pdamp::soft {
+
+using simd::SimdPath;
 
 struct SoftEngineOptions {
   /// Keep the host still at its initial displacement (the settling phase).

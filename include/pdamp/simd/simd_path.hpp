@@ -1,12 +1,14 @@
 #pragma once
-/// The instruction sets the soft engine's kernels are compiled for, one chosen at run time
-/// (the default build stays portable to any x86-64): SSE2 with 2 lanes, AVX2 with 4,
-/// AVX-512 with 8. Every lane performs the scalar code's IEEE operations in its order, so
-/// all paths give the same bits.
+/// The instruction sets the engines' kernels are compiled for, one chosen at run time for
+/// both engines (the default build stays portable to any x86-64): SSE2 with 2 lanes, AVX2
+/// with 4, AVX-512 with 8. The soft engine's passes run on the chosen one; the hard
+/// engine's neighbour screen, four lanes wide, runs on AVX2 where AVX2 or AVX-512 is chosen
+/// and on SSE2 otherwise. Every lane performs the scalar code's IEEE operations in its
+/// order, so all paths give the same bits.
 
 #include <string_view>
 
-namespace pdamp::soft {
+namespace pdamp::simd {
 
 enum class SimdPath { sse2, avx2, avx512 };
 
@@ -28,4 +30,4 @@ void require_available(SimdPath path, std::string_view what);
 /// Throws as require_available does.
 void set_default_simd_path(SimdPath path, std::string_view what);
 
-}  // namespace pdamp::soft
+}  // namespace pdamp::simd

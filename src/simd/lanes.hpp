@@ -1,10 +1,11 @@
 #pragma once
-/// Arithmetic for several contacts (or spheres) side by side in SIMD lanes. The soft
-/// engine's kernels are written once, for a real type that is `double` or a GCC vector of
-/// 2, 4 or 8 doubles (an SSE2, AVX2 or AVX-512 register): each lane performs the same IEEE
-/// operations in the same order as the scalar code, so a result is the same bits whatever
-/// the width that computes it. (The soft library is compiled with -ffp-contract=off, so that
-/// no path fuses a multiply and an add that another does not.) Branches on data are selects.
+/// Arithmetic for several contacts, spheres or planes side by side in SIMD lanes, for both
+/// engines. Their kernels are written once, for a real type that is `double` or a GCC
+/// vector of 2, 4 or 8 doubles (an SSE2, AVX2 or AVX-512 register): each lane performs the
+/// same IEEE operations in the same order as the scalar code, so a result is the same bits
+/// whatever the width that computes it. (The project is compiled with -ffp-contract=off, so
+/// that no path fuses a multiply and an add that another does not.) Branches on data are
+/// selects. Which width runs is chosen once per process (pdamp/simd/simd_path.hpp).
 
 #include <algorithm>
 #include <bit>
@@ -13,7 +14,7 @@
 #include <type_traits>
 #include <utility>
 
-namespace pdamp::soft {
+namespace pdamp::simd {
 
 using Lanes2 = double __attribute__((vector_size(16)));
 using Lanes4 = double __attribute__((vector_size(32)));
@@ -153,6 +154,12 @@ template <class Real>
 template <class LaneMask, class Real>
 [[gnu::always_inline]] inline Real select(LaneMask mask, Real a, Real b) {
   return mask ? a : b;
+}
+/// `mask ? a : b` as and, and-not, or: two lanes that GCC would otherwise compile to a
+/// branch per lane (the hard engine's root finders, where which lane holds is a coin toss).
+inline double blend(bool mask, double a, double b) { return mask ? a : b; }
+inline Lanes2 blend(Mask2 mask, Lanes2 a, Lanes2 b) {
+  return reinterpret_cast<Lanes2>((reinterpret_cast<Mask2>(a) & mask) | (reinterpret_cast<Mask2>(b) & ~mask));
 }
 
 template <class Real>
@@ -299,4 +306,4 @@ Vec3<Real> select(LaneMask mask, const Vec3<Real>& a, const Vec3<Real>& b) {
   return {select(mask, a.x, b.x), select(mask, a.y, b.y), select(mask, a.z, b.z)};
 }
 
-}  // namespace pdamp::soft
+}  // namespace pdamp::simd

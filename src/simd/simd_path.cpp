@@ -1,11 +1,11 @@
-#include "pdamp/soft/simd_path.hpp"
+#include "pdamp/simd/simd_path.hpp"
 
 #include <atomic>
 #include <string>
 
 #include "pdamp/errors.hpp"
 
-namespace pdamp::soft {
+namespace pdamp::simd {
 namespace {
 
 std::atomic<int> chosen_default{-1};  ///< a SimdPath, or −1 for the widest
@@ -89,4 +89,4 @@ void set_default_simd_path(SimdPath path, std::string_view what) {
   chosen_default.store(static_cast<int>(path));
 }
 
-}  // namespace pdamp::soft
+}  // namespace pdamp::simd

@@ -13,7 +13,7 @@ struct InputFile {
   std::string name;       ///< how messages name it: "scenario file 'x.ini'"
   std::string kind;       ///< what it is, for the size limit: "a scenario file"
   std::size_t max_bytes;  ///< the most it may hold
-  std::string hint = "";  ///< ends the message when it cannot be read
+  std::string hint{};     ///< ends the message when it cannot be read
 };
 
 /// The whole of `file`. It is opened without blocking, so that a FIFO cannot hang the

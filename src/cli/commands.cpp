@@ -376,6 +376,7 @@ int show_run_command(const std::string& run_id_text, const std::filesystem::path
 
 int delete_runs_command(const std::vector<std::string>& run_id_texts, const std::filesystem::path& db, bool force) {
   std::vector<std::int64_t> run_ids;
+  run_ids.reserve(run_id_texts.size());
   for (const auto& text : run_id_texts) run_ids.push_back(parse_run_id(text));
   RunStore store(db, StoreAccess::modify);
   for (const DeletedRun& d : store.delete_runs(run_ids, force)) {

@@ -89,7 +89,7 @@ rom::DamperTable characterisation_table(const po::variables_map& vm) {
     std::string list;
     for (const auto& v : present) list += (list.empty() ? "" : ", ") + v;
     if (vm.count(option)) {
-      const std::string value = vm[option].as<std::string>();
+      std::string value = vm[option].as<std::string>();
       if (!present.contains(value)) {
         throw InputError(where + ": --" + option + " " + value + ": the study's " + what + " are " + list);
       }

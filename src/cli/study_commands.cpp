@@ -432,6 +432,7 @@ int study_plot(const std::vector<std::string>& args) {
   if (vm.count("x")) python.insert(python.end(), {"--x", vm["x"].as<std::string>()});
   if (vm.count("out")) python.insert(python.end(), {"--out", vm["out"].as<std::string>()});
   std::vector<char*> argv;
+  argv.reserve(python.size() + 1);
   for (auto& a : python) argv.push_back(a.data());
   argv.push_back(nullptr);
   execv(argv[0], argv.data());

@@ -15,10 +15,13 @@
 
 namespace pdamp::hard {
 
-/// Explicit instantiations of a part's transfer for the writer and the reader.
+/// Explicit instantiations of a part's transfer for the writer and the reader. `Part` names
+/// a class (Part::transfer), which parentheses would not parse.
+// NOLINTBEGIN(bugprone-macro-parentheses)
 #define PDAMP_CHECKPOINT_PART(Part)                             \
   template void Part::transfer(const Part&, CheckpointWriter&); \
   template void Part::transfer(Part&, CheckpointReader&)
+// NOLINTEND(bugprone-macro-parentheses)
 
 template <class Self, class Archive>
 void EventQueue::transfer(Self& q, Archive& a) {

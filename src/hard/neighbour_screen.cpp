@@ -24,7 +24,7 @@ using Mask = simd::Mask4;
 
 /// The eight doubles of four records as eight vectors: x, y, z, t_ref, vx, vy, vz, radius.
 [[gnu::always_inline]] inline void transpose(const FlightRecord* const (&record)[width], Lanes (&field)[8]) {
-  for (int half = 0; half < 2; ++half) {  // x y z t_ref, then vx vy vz radius
+  for (std::ptrdiff_t half = 0; half < 2; ++half) {  // x y z t_ref, then vx vy vz radius
     Lanes r0 = simd::load<Lanes>(&record[0]->x_m + 4 * half), r1 = simd::load<Lanes>(&record[1]->x_m + 4 * half);
     Lanes r2 = simd::load<Lanes>(&record[2]->x_m + 4 * half), r3 = simd::load<Lanes>(&record[3]->x_m + 4 * half);
     simd::transpose(r0, r1, r2, r3);

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <type_traits>
 #include <utility>
@@ -63,9 +64,16 @@ using Mask8 = decltype(Lanes8{} < Lanes8{});
   return static_cast<unsigned>(__builtin_ia32_movmskpd256(std::bit_cast<Lanes4>(mask)));
 }
 [[gnu::target("avx512f")]] inline unsigned lane_bits(const Mask8& mask) {
+#ifdef __clang__
+  // Clang lacks GCC's builtin; it only parses this file (tools/tidy.sh): GCC builds the engines.
+  unsigned bits = 0;
+  for (int l = 0; l < 8; ++l) bits |= (mask[l] != 0 ? 1U : 0U) << l;
+  return bits;
+#else
   using Longs8 = long long __attribute__((vector_size(64)));
   const auto lanes = std::bit_cast<Longs8>(mask);
   return __builtin_ia32_ptestmq512(lanes, lanes, 0xff);
+#endif
 }
 
 /// The lanes l where p[l] ≠ 0, as bits.
@@ -80,7 +88,7 @@ template <class Real>
     unsigned bits = 0;
     for (int quad = 0; quad * 4 < lane_count<Real>; ++quad) {
       Ints4 values{};
-      std::memcpy(&values, p + 4 * quad, sizeof(int) * std::min(4, lane_count<Real>));
+      std::memcpy(&values, p + std::ptrdiff_t{4} * quad, sizeof(int) * std::min(4, lane_count<Real>));
       const Ints4 nonzero = values != 0;
       bits |= static_cast<unsigned>(__builtin_ia32_movmskps(std::bit_cast<Floats4>(nonzero))) << (4 * quad);
     }

@@ -17,6 +17,7 @@
 /// build to the next.
 
 #include <algorithm>
+#include <cstddef>
 #include <vector>
 
 #include "pdamp/model/cell_grid.hpp"
@@ -107,7 +108,7 @@ void NeighbourList::list_partners(int i, int begin, int end, const SphereBalls& 
   const Ball& ball = balls[i];
   // Registers may read past `end` (the balls are padded); those lanes are not counted.
   for (int j = begin; j < end; j += lanes) {
-    const Fields4<Real> other = load_records<Real>([&](int l) { return balls.data() + 4 * (j + l); });
+    const Fields4<Real> other = load_records<Real>([&](int l) { return balls.data() + std::ptrdiff_t{4} * (j + l); });
     const Real dx = ball.x - other.a, dy = ball.y - other.b, dz = ball.z - other.c;
     const Real reach = ball.radius + other.d + skin_m_;
     unsigned within = lane_bits(dx * dx + dy * dy + dz * dz < reach * reach);

@@ -44,6 +44,13 @@ std::string error_of(const std::function<void()>& f) {
   return "(no error)";
 }
 
+/// Runs the study in FILE into DB; the test stops there, with pdamp's stderr, if it fails.
+void run_study(const std::filesystem::path& file, const std::filesystem::path& db, const TempDir& dir) {
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+}
+
 /// Beds kept as a point's final state that no completed point refers to.
 std::int64_t orphan_end_states(const std::filesystem::path& db) {
   return count_rows(db,
@@ -185,9 +192,7 @@ TEST_CASE("continuation: each point starts from the stored final state of the on
                          "\n\n[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.2\n"
                          "frequencies = 16, 18\n" +
                          (model == Model::hard ? "max_cycles = 40\n" : "max_cycles = 6\nmin_cycles = 2\n"));
-    const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
-    INFO(r.err);
-    REQUIRE(r.code == 0);
+    run_study(file, db, dir);
     RunStore store(db, StoreAccess::read);
     StudyStore studies(store);
     const Study s = stored_study(*studies.study(1));
@@ -271,9 +276,7 @@ TEST_CASE("start = predict: a continued point starts on its predicted steady sta
                "frequencies = 12, 14, 16\namplitude_tolerance = 1e-9\nphase_tolerance_rad = 1e-9\n"
                "start = " +
                    start + "\n");
-    const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
-    INFO(r.err);
-    REQUIRE(r.code == 0);
+    run_study(file, db, dir);
     RunStore store(db, StoreAccess::read);
     curves[start] = StudyStore(store).frf_points(1);
     REQUIRE(curves[start].size() == 3);
@@ -298,9 +301,7 @@ TEST_CASE("start = predict: a continued point starts on its predicted steady sta
   const auto db = dir / "bed.sqlite";
   const auto file = dir / "bed.ini";
   write_file(file, frf_study("levels = 0.2\nfrequencies = 16, 18\nmax_cycles = 40\nstart = predict\n"));
-  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
-  INFO(r.err);
-  REQUIRE(r.code == 0);
+  run_study(file, db, dir);
   RunStore store(db, StoreAccess::read);
   StudyStore studies(store);
   const Study s = stored_study(*studies.study(1));

@@ -433,10 +433,12 @@ namespace {
 /// collected; points 2 and 3 made to run again (their runs deleted), so that the first
 /// curve resumes from point 1's final state, which the folder's study then holds; both
 /// curves resubmitted and collected. Every metric that `metric_differences` compares, every
-/// sample and every run are the same bits.
+/// sample and every run are the same bits. `predicted_beds`: each continued point's start is
+/// a bed of its own (start = predict).
 void check_curves_on_shards(
     const test::TempDir& dir, const std::string& sections,
-    const std::function<std::int64_t(const std::filesystem::path&, const std::filesystem::path&)>& metric_differences) {
+    const std::function<std::int64_t(const std::filesystem::path&, const std::filesystem::path&)>& metric_differences,
+    bool predicted_beds = false) {
   const auto file = dir / "curves.ini";
   test::write_file(file, "[study]\nname = curves\nscenario = " + test::small() + "\nmodels = hard\n\n" + sections);
   const study::Study study = study::make_study(study::read_study_source(file), false);
@@ -477,7 +479,8 @@ void check_curves_on_shards(
   REQUIRE(report.merged.size() == 2);
   CHECK(report.merged[0].points == 3);
   CHECK(report.merged[0].runs == 3);
-  CHECK(report.merged[0].beds_added == 4);  // the settled bed and three final states
+  // The settled bed and three final states, and points 2 and 3's predicted starts.
+  CHECK(report.merged[0].beds_added == (predicted_beds ? 6 : 4));
   CHECK(report.merged[1].points == 1);
   CHECK(report.merged[1].task.outcome == PointStatus::interrupted);
   const auto status_of = [&](int point) { return studies.point(id, point)->status; };
@@ -503,7 +506,9 @@ void check_curves_on_shards(
   report = collect_shards(store, record, {folder});
   REQUIRE(report.merged.size() == 2);
   CHECK(report.merged[0].points == 2);
-  CHECK(report.merged[0].beds_shared == 1);  // point 1's final state, the store's
+  // Point 1's final state, the store's; predicted from it again, point 2's start (under the
+  // same key: point 1's run has the id 1 in the first shard and in the store).
+  CHECK(report.merged[0].beds_shared == (predicted_beds ? 2 : 1));
   CHECK(report.merged[1].points == 3);
   CHECK(report.refused.empty());
   for (int p = 1; p <= 6; ++p) CHECK(status_of(p) == PointStatus::completed);
@@ -530,6 +535,17 @@ TEST_CASE("an [frf] study on Slurm: a task per curve, a curve resumed from its l
                          "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.05, 0.2\n"
                          "frequencies = 15, 17, 19\nmax_cycles = 20\n",
                          test::frf_metric_differences);
+}
+
+// Resumed from point 1, the first curve's point 2 is predicted from point 1's metrics, which
+// the folder's study must hold beside its final state.
+TEST_CASE(
+    "a start = predict [frf] curve on Slurm resumed mid-curve: predicted from the copied metrics, the same bits") {
+  test::TempDir dir("slurm-frf-predict");
+  check_curves_on_shards(dir,
+                         "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.05, 0.2\n"
+                         "frequencies = 15, 17, 19\nmax_cycles = 20\nstart = predict\n",
+                         test::frf_metric_differences, true);
 }
 
 TEST_CASE("a [characterise] study on Slurm: a task per curve up the amplitudes, resumed mid-curve, the same bits") {

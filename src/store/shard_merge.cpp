@@ -474,6 +474,8 @@ void copy_end_states(RunStore& store, std::int64_t study_id, const std::vector<i
   sqlite::write_transaction(to, [&] {
     RowCopier point_row(from, to, "study_points", "point", {}, {}, this_study);
     RowCopier end_row(from, to, "study_point_states", "point", {}, {}, this_study);
+    // A start = predict point is predicted from the previous point's metrics as well.
+    RowCopier metrics_row(from, to, "study_frf_metrics", "point", {}, {}, this_study);
     RowCopier run_row(from, to, "runs", "run_id", {});
     RowCopier state_row(from, to, "initial_states", "state_id", {});
     RowCopier particle_rows(from, to, "initial_particles", "state_id", {});
@@ -495,6 +497,7 @@ void copy_end_states(RunStore& store, std::int64_t study_id, const std::vector<i
       run_row.copy(beds.column_int(0));
       point_row.copy(point);
       end_row.copy(point);
+      metrics_row.copy(point);
       beds.reset();
     }
   });

@@ -461,14 +461,46 @@ std::optional<FrfEndState> StudyStore::end_state(std::int64_t study_id, int poin
   return FrfEndState{q.column_int(0), q.column_int(1), q.column_double(2), {q.column_double(3), q.column_double(4)}};
 }
 
+namespace {
+
+/// A frequency-response point's stored metrics (study_frf_metrics' columns, also the
+/// study_frf view's), selected in this order from column `first` of `q` on.
+constexpr std::string_view frf_metric_columns =
+    "run_id, settled, cycles_to_steady, cycles_run, measured_cycles, amplitude_m, amplitude_spread_m, phase_rad, "
+    "normalised_amplitude, gamma, impact_J_per_cycle, friction_J_per_cycle, viscous_J_per_cycle, loss_factor, "
+    "apparent_mass_kg, equivalent_damping_N_s_m, particle_mass_kg, wall_time_s";
+
+FrfPointResult read_frf_metrics(const sqlite::Statement& q, int first) {
+  FrfPointResult m;
+  m.run_id = q.column_int(first);
+  m.metrics.settled = q.column_int(first + 1) != 0;
+  m.metrics.cycles_to_steady = static_cast<int>(q.column_int(first + 2));
+  m.cycles_run = static_cast<int>(q.column_int(first + 3));
+  m.metrics.measured_cycles = static_cast<int>(q.column_int(first + 4));
+  double* values[] = {&m.metrics.amplitude_m,
+                      &m.metrics.amplitude_spread_m,
+                      &m.metrics.phase_rad,
+                      &m.metrics.normalised_amplitude,
+                      &m.metrics.gamma,
+                      &m.metrics.impact_J_per_cycle,
+                      &m.metrics.friction_J_per_cycle,
+                      &m.metrics.viscous_J_per_cycle,
+                      &m.metrics.loss_factor,
+                      &m.metrics.apparent_mass_kg,
+                      &m.metrics.equivalent_damping_N_s_m,
+                      &m.particle_mass_kg,
+                      &m.wall_time_s};
+  for (int k = 0; k < 13; ++k) *values[k] = q.column_double(first + 5 + k);
+  return m;
+}
+
+}  // namespace
+
 std::vector<FrfPointRecord> StudyStore::frf_points(std::int64_t study_id) {
   sqlite::Statement q(db(),
-                      "SELECT f.point, f.status, f.curve, f.model, f.direction, f.host_alone, f.mode, f.level, "
-                      "f.frequency_hz, f.step, coalesce(f.previous_point, 0), f.run_id, f.settled, "
-                      "f.cycles_to_steady, f.cycles_run, f.measured_cycles, f.amplitude_m, f.amplitude_spread_m, "
-                      "f.phase_rad, f.normalised_amplitude, f.gamma, f.impact_J_per_cycle, f.friction_J_per_cycle, "
-                      "f.viscous_J_per_cycle, f.loss_factor, f.apparent_mass_kg, f.equivalent_damping_N_s_m, "
-                      "f.particle_mass_kg, f.wall_time_s FROM study_frf f WHERE f.study_id = ? ORDER BY f.point");
+                      "SELECT point, status, curve, model, direction, host_alone, mode, level, frequency_hz, step, "
+                      "coalesce(previous_point, 0), " +
+                          std::string(frf_metric_columns) + " FROM study_frf WHERE study_id = ? ORDER BY point");
   q.bind(1, study_id);
   std::vector<FrfPointRecord> rows;
   while (q.step()) {
@@ -484,32 +516,18 @@ std::vector<FrfPointRecord> StudyStore::frf_points(std::int64_t study_id) {
                q.column_double(8),
                static_cast<int>(q.column_int(9)),
                static_cast<int>(q.column_int(10))};
-    if (!q.is_null(11)) {
-      FrfPointResult m;
-      m.run_id = q.column_int(11);
-      m.metrics.settled = q.column_int(12) != 0;
-      m.metrics.cycles_to_steady = static_cast<int>(q.column_int(13));
-      m.cycles_run = static_cast<int>(q.column_int(14));
-      m.metrics.measured_cycles = static_cast<int>(q.column_int(15));
-      double* values[] = {&m.metrics.amplitude_m,
-                          &m.metrics.amplitude_spread_m,
-                          &m.metrics.phase_rad,
-                          &m.metrics.normalised_amplitude,
-                          &m.metrics.gamma,
-                          &m.metrics.impact_J_per_cycle,
-                          &m.metrics.friction_J_per_cycle,
-                          &m.metrics.viscous_J_per_cycle,
-                          &m.metrics.loss_factor,
-                          &m.metrics.apparent_mass_kg,
-                          &m.metrics.equivalent_damping_N_s_m,
-                          &m.particle_mass_kg,
-                          &m.wall_time_s};
-      for (int k = 0; k < 13; ++k) *values[k] = q.column_double(16 + k);
-      r.result = m;
-    }
+    if (!q.is_null(11)) r.result = read_frf_metrics(q, 11);
     rows.push_back(std::move(r));
   }
   return rows;
+}
+
+std::optional<FrfPointResult> StudyStore::frf_metrics(std::int64_t study_id, int point) {
+  sqlite::Statement q(
+      db(), "SELECT " + std::string(frf_metric_columns) + " FROM study_frf_metrics WHERE study_id = ? AND point = ?");
+  q.bind(1, study_id).bind(2, point);
+  if (!q.step()) return std::nullopt;
+  return read_frf_metrics(q, 0);
 }
 
 std::vector<CharacterisePointRecord> StudyStore::characterise_points(std::int64_t study_id) {

@@ -220,15 +220,14 @@ class PointExecution {
   std::optional<HostState> predicted_start_shift(const StudyPoint& point) {
     if (study_->file.frfs.at(point.frf->section).start != FrfStart::prediction) return std::nullopt;
     const int previous = point.frf->previous;
-    const auto rows = studies_.frf_points(study_id_);
-    const auto row = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return r.point == previous; });
-    if (row == rows.end() || !row->result) {
+    const auto stored = studies_.frf_metrics(study_id_, previous);
+    if (!stored) {
       throw RuntimeFailure("point " + std::to_string(point_) + " is predicted from point " + std::to_string(previous) +
                            ", whose metrics are not stored");
     }
     const StudyPoint& before = study_->points.at(static_cast<std::size_t>(previous - 1));
     const double previous_omega_rad_s = point_scenario(*study_, before).excitation.angular_frequency_rad_s();
-    return predicted_shift(row->result->metrics, previous_omega_rad_s, HostModel(point_scenario(*study_, point)));
+    return predicted_shift(stored->metrics, previous_omega_rad_s, HostModel(point_scenario(*study_, point)));
   }
 
   /// A characterisation point: the container's prescribed motion (time restarts at 0 on

@@ -55,7 +55,8 @@ ShardMerge merge_shard(RunStore& store, const StudyRecord& study, const std::fil
 
 /// Copies the final states of the completed curve points `points` of study `study_id` from
 /// `store` into `target` (a shard folder's study, which each task copies): each point's row,
-/// its final state with its run's row and the run's own bed, under the store's ids and
+/// its final state with its run's row and the run's own bed, a frequency-response point's
+/// metrics (which start = predict predicts from), under the store's ids and
 /// labels, so that a resubmitted curve's task continues from them and collect finds them
 /// the store's. Throws RuntimeFailure for a point without a final state.
 void copy_end_states(RunStore& store, std::int64_t study_id, const std::vector<int>& points, RunStore& target);

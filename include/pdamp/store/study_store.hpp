@@ -188,6 +188,9 @@ class StudyStore {
   std::vector<PointMetrics> metrics(std::int64_t study_id);
   /// Each frequency-response point with its place and, if completed, its metrics.
   std::vector<FrfPointRecord> frf_points(std::int64_t study_id);
+  /// A completed frequency-response point's metrics (its final state: end_state), which a
+  /// predicted point starts from; nothing for another point.
+  std::optional<FrfPointResult> frf_metrics(std::int64_t study_id, int point);
   /// Each characterisation point with its place and, if completed, its metrics.
   std::vector<CharacterisePointRecord> characterise_points(std::int64_t study_id);
   /// The point each frequency-response or characterisation point starts from, for those

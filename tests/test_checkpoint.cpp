@@ -6,6 +6,7 @@
 #include <doctest/doctest.h>
 #include <omp.h>
 
+#include <atomic>
 #include <random>
 #include <thread>
 #include <tuple>
@@ -15,6 +16,8 @@
 #include "pdamp/sim/run.hpp"
 #include "pdamp/sim/stored_run.hpp"
 #include "pdamp/store/run_store.hpp"
+#include "pdamp/study/point_runner.hpp"
+#include "pdamp/study/study_runner.hpp"
 #include "pdamp/version.hpp"
 #include "soft/soft_engine_class.hpp"
 #include "test_process.hpp"
@@ -351,5 +354,67 @@ TEST_CASE("pdamp resume of a killed comparison's run completes it: the same rows
     CHECK(differing_rows(reference, 1, 1, db) == 0);
     CHECK(differing_rows(reference, 2, 2, db) == 0);
     CHECK(comparison_differences(reference, db) == 0);
+  }
+}
+
+TEST_CASE("pdamp resume refuses a comparison's run without a checkpoint, changing nothing") {
+  test::TempDir dir("checkpoint-compare-none");
+  const auto db = dir / "runs.sqlite";
+  // Killed in its soft run (about 2 s of wall time), which takes no checkpoints.
+  Process killed({"compare", "--scenario", small(), "--duration", "1", "--db", db.string(), "--checkpoint-every", "0"},
+                 dir);
+  auto begun = [&] {
+    return std::filesystem::exists(db) &&
+           test::count_rows(db, "SELECT count(*) FROM sqlite_schema WHERE name = 'comparison_runs'") > 0 &&
+           test::count_rows(db, "SELECT count(*) FROM comparison_runs") > 0;
+  };
+  for (int i = 0; i < 20000 && !begun(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  killed.signal(SIGKILL);
+  killed.wait();
+  REQUIRE(test::count_rows(db, "SELECT count(*) FROM runs WHERE status = 'running' AND model = 'soft'") == 1);
+  const std::string samples = "SELECT count(*) FROM samples";
+  const std::int64_t samples_before = test::count_rows(db, samples);
+  const Result refused = pdamp_cli({"resume", "1", "--db", db.string()}, dir);
+  CHECK(refused.code == 2);
+  CHECK(refused.err.find("run 1 has no checkpoint") != std::string::npos);
+  CHECK(test::count_rows(db, "SELECT count(*) FROM runs") == 1);
+  CHECK(test::count_rows(db, samples) == samples_before);
+  CHECK(test::count_rows(db, "SELECT count(*) FROM comparison_runs") == 1);
+}
+
+TEST_CASE(
+    "pdamp resume refuses the run of an [frf] or [characterise] point, naming the study resume that continues it") {
+  test::TempDir dir("checkpoint-curve-point");
+  const auto db = dir / "runs.sqlite";
+  const std::pair<std::string, std::string> sections[] = {
+      {"frf", "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.05\nfrequencies = 15, 17\n"},
+      {"characterise", "[characterise]\namplitudes = 0.0005, 0.0015\nfrequencies = 15, 20\n"}};
+  for (const auto& [section, keys] : sections) {
+    CAPTURE(section);
+    const auto file = dir / (section + ".ini");
+    test::write_file(file, "[study]\nname = " + section + "\nscenario = " + small() + "\nmodels = hard\n\n" + keys);
+    const study::Study s = study::make_study(study::read_study_source(file), false);
+    std::int64_t study_id = 0, run_id = 0;
+    {
+      RunStore store(db);
+      study_id = study::find_or_create_study(store, s);
+      // Stopped once its run is under way: the run ends interrupted with a checkpoint.
+      std::atomic<bool> stop{false};
+      study::PointRunControl control;
+      control.stop = &stop;
+      control.checkpoint_interval = std::chrono::milliseconds(60'000);
+      control.progress = [&](double, std::string_view phase) { stop = stop || phase != "settling"; };
+      REQUIRE(study::run_study_point(store, study_id, s, 1, control).status == PointStatus::interrupted);
+      run_id = test::count_rows(db, "SELECT max(run_id) FROM runs");
+      CHECK(store.checkpoint(run_id));
+    }
+    const Result refused = pdamp_cli({"resume", std::to_string(run_id), "--db", db.string()}, dir);
+    CHECK(refused.code == 2);
+    const std::string id = std::to_string(study_id);
+    CHECK(refused.err.find("run " + std::to_string(run_id) + " is the run of [" + section + "] point 1 of study " +
+                           id) != std::string::npos);
+    CHECK(refused.err.find("continued with its point, from its checkpoint, by 'pdamp study resume " + id + "'") !=
+          std::string::npos);
+    CHECK(RunStore(db, StoreAccess::read).summary(run_id)->status == "interrupted");
   }
 }

@@ -18,6 +18,7 @@
 #include "pdamp/sim/run.hpp"
 #include "pdamp/sim/stored_run.hpp"
 #include "pdamp/store/run_store.hpp"
+#include "pdamp/store/study_store.hpp"
 #include "progress.hpp"
 #include "text_table.hpp"
 
@@ -174,6 +175,14 @@ int resume_command(const std::string& run_id_text, std::optional<double> until_s
                    bool terminal, std::chrono::milliseconds checkpoint_interval) {
   const std::int64_t run_id = parse_run_id(run_id_text);
   RunStore store(db, StoreAccess::modify);
+  if (const auto point = StudyStore(store).curve_point_of_run(run_id)) {
+    const std::string study = std::to_string(point->study_id);
+    throw InputError("run " + std::to_string(run_id) + " is the run of [" + point->section + "] point " +
+                     std::to_string(point->point) + " of study " + study +
+                     ", which runs cycle by cycle to its steady state: such a run is continued with its point, "
+                     "from its checkpoint, by 'pdamp study resume " +
+                     study + "'");
+  }
   if (const auto comparison = store.comparison_runs(run_id)) {
     if (until_s) {
       throw InputError("run " + std::to_string(run_id) +

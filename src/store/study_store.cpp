@@ -289,6 +289,18 @@ std::optional<std::int64_t> StudyStore::earlier_run(std::int64_t study_id, int p
   return q.column_int(0);
 }
 
+std::optional<CurvePointRun> StudyStore::curve_point_of_run(std::int64_t run_id) {
+  sqlite::Statement q(db(),
+                      "SELECT l.study_id, l.point, CASE WHEN f.point IS NOT NULL THEN 'frf' ELSE 'characterise' END "
+                      "FROM study_point_runs l "
+                      "LEFT JOIN study_frf_points f ON f.study_id = l.study_id AND f.point = l.point "
+                      "LEFT JOIN study_characterise_points c ON c.study_id = l.study_id AND c.point = l.point "
+                      "WHERE l.run_id = ? AND (f.point IS NOT NULL OR c.point IS NOT NULL)");
+  q.bind(1, run_id);
+  if (!q.step()) return std::nullopt;
+  return CurvePointRun{q.column_int(0), static_cast<int>(q.column_int(1)), q.column_text(2)};
+}
+
 void StudyStore::move_run(std::int64_t study_id, int point, int attempt, std::int64_t run_id) {
   sqlite::write_transaction(db(), [&] {
     sqlite::Statement move(db(),

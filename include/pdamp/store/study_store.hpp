@@ -103,6 +103,14 @@ struct FrfPointRecord {
   std::optional<FrfPointResult> result;
 };
 
+/// The study point a run was run for, where that point runs cycle by cycle (an [frf] or a
+/// [characterise] point's run, which only its point can continue).
+struct CurvePointRun {
+  std::int64_t study_id = 0;
+  int point = 0;
+  std::string section;  ///< "frf" or "characterise"
+};
+
 struct StudyRecord {
   std::int64_t study_id = 0;
   std::string name, models, study_file, study_text, scenario_file, scenario_text, pdamp_version, created_at;
@@ -207,6 +215,8 @@ class StudyStore {
   /// next attempt; returns the attempt, or nothing if the point is completed or running.
   std::optional<int> claim_point(std::int64_t study_id, int point, const ProcessLease& lease);
   void link_run(std::int64_t study_id, int point, int attempt, std::string_view model, std::int64_t run_id);
+  /// The [frf] or [characterise] point `run_id` was run for; nothing for another run.
+  std::optional<CurvePointRun> curve_point_of_run(std::int64_t run_id);
   /// The point's run of `model` linked to its latest attempt before `attempt`, if any.
   std::optional<std::int64_t> earlier_run(std::int64_t study_id, int point, int attempt, std::string_view model);
   /// Links a run of an earlier attempt of the point to `attempt` instead (it continues there).

@@ -385,6 +385,45 @@ TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKIL
   CHECK(count_rows(killed, "SELECT count(*) FROM study_point_states") == 15);
 }
 
+TEST_CASE("a start = predict [frf] study killed in a predicted point and resumed: from its checkpoint, the same bits") {
+  test::TempDir dir("frf-predict-kill");
+  const auto file = dir / "frf.ini";
+  write_file(file, frf_study("levels = 0.05, 0.2\nfrequencies = 15, 17, 19\nmax_cycles = 60\nstart = predict\n"));
+  const auto reference = run_study_per_jobs(file, dir, {2}).at(2);
+  CHECK(count_rows(reference, "SELECT count(*) FROM study_frf_metrics") == 6);
+
+  // Killed with its workers once a predicted point (one that continues another) has a
+  // checkpoint: resumed, that point goes on from it, on the bed predicted before the kill.
+  const auto killed = dir / "killed.sqlite";
+  kill_study_when(file, killed, dir, "study_frf",
+                  "SELECT count(*) FROM run_checkpoints JOIN runs r USING (run_id) JOIN study_point_runs l "
+                  "USING (run_id) JOIN study_frf_points f ON f.study_id = l.study_id AND f.point = l.point "
+                  "WHERE r.status <> 'completed' AND f.previous_point IS NOT NULL",
+                  {"--checkpoint-every", "0.01"});
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 6);
+  const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
+  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  INFO("runs with a checkpoint before the resume: " << checkpointed);
+  CHECK(checkpointed != "()");
+  CHECK(runs_continued_by_their_points(killed, checkpointed) ==
+        count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
+  CHECK(frf_metric_differences(reference, killed) == 0);
+  CHECK(frf_metric_differences(killed, reference) == 0);
+  const auto [differing, compared] = sample_differences(reference, killed);
+  CHECK(compared > 6 * 10);
+  CHECK(differing == 0);
+  CHECK(cycle_differences(reference, killed).first == 0);
+  CHECK(orphan_end_states(killed) == 0);
+  // Each continued point's run started from its predicted bed, one per point.
+  const std::string predicted_starts =
+      "SELECT count(DISTINCT r.initial_state_id) FROM runs r JOIN initial_states i ON i.state_id = r.initial_state_id "
+      "WHERE i.settle_key LIKE 'frequency-response point start: % predicted from run %'";
+  CHECK(count_rows(killed, predicted_starts) == 4);
+  CHECK(count_rows(reference, predicted_starts) == 4);
+}
+
 TEST_CASE("pdamp study plot draws an [frf] study's response") {
   test::TempDir dir("frf-plot");
   const auto db = (dir / "runs.sqlite").string();

@@ -139,7 +139,7 @@ TEST_CASE("the job script: one array task per point, from 0, throttled, with the
         "#SBATCH --partition=short\n", "#SBATCH --account=lab\n", "#SBATCH --time=1:00:00\n",
         "\nexec '/opt/pdamp'\\''s build/pdamp' study task '/data/runs.sqlite.shards/study-7' --job "
         "\"$SLURM_ARRAY_JOB_ID\" --task \"$SLURM_ARRAY_TASK_ID\" --points 1-3,5,9 --threads "
-        "\"${SLURM_CPUS_PER_TASK:-1}\" "
+        "\"${SLURM_CPUS_PER_TASK:-1}\" --checkpoint-every '60' "
         "--scratch \"$TMPDIR\"\n"}) {
     CAPTURE(line);
     CHECK(contains(script, line));
@@ -149,7 +149,9 @@ TEST_CASE("the job script: one array task per point, from 0, throttled, with the
 
   // Options not given leave the cluster's defaults.
   request.options = {};
+  request.options.checkpoint_every = "0.5";
   const std::string plain = job_script(request);
+  CHECK(contains(plain, " --checkpoint-every '0.5'\n"));
   CHECK(contains(plain, "#SBATCH --array=0-4\n"));
   for (const char* absent : {"--partition", "--account", "--time", "--scratch"}) CHECK(!contains(plain, absent));
 
@@ -429,11 +431,13 @@ namespace {
 
 /// A study of two curves of three points each (points 1-3 and 4-6; `sections` on small.ini's
 /// hard model) as Slurm runs it, against the same study run here point by point, as `pdamp
-/// study run`'s workers run them: a task per curve, the second stopped in its first point;
-/// collected; points 2 and 3 made to run again (their runs deleted), so that the first
-/// curve resumes from point 1's final state, which the folder's study then holds; both
-/// curves resubmitted and collected. Every metric that `metric_differences` compares, every
-/// sample and every run are the same bits. `predicted_beds`: each continued point's start is
+/// study run`'s workers run them: a task per curve, the second stopped in its first point
+/// once its run has a checkpoint (as Slurm's SIGTERM stops a task); collected; points 2 and
+/// 3 made to run again (their runs deleted), so that the first curve resumes from point 1's
+/// final state, which the folder's study then holds, as it holds point 4's interrupted run;
+/// both curves resubmitted (the second continuing point 4's run from its checkpoint) and
+/// collected. Every metric that `metric_differences` compares, every sample and every run
+/// are the same bits. `predicted_beds`: each continued point's start is
 /// a bed of its own (start = predict).
 void check_curves_on_shards(
     const test::TempDir& dir, const std::string& sections,
@@ -468,9 +472,11 @@ void check_curves_on_shards(
   CHECK(started == std::vector<int>{1, 2, 3});
   CHECK(curve.points_completed == 3);
   CHECK(curve.last_point == 3);
-  std::atomic<bool> stop{true};
+  std::atomic<bool> stop{false};
   study::PointRunControl stopped;
   stopped.stop = &stop;
+  stopped.checkpoint_interval = std::chrono::milliseconds(60'000);  // and at the stop
+  stopped.progress = [&](double, std::string_view phase) { stop = stop || phase != "settling"; };
   curve = run_shard_task({folder, 10, 1, 4, {}}, stopped);
   CHECK(curve.point.status == PointStatus::interrupted);
   CHECK(curve.points_completed == 0);
@@ -488,6 +494,9 @@ void check_curves_on_shards(
   CHECK(status_of(4) == PointStatus::interrupted);
   CHECK(status_of(5) == PointStatus::pending);
   CHECK(test::count_rows(db, "SELECT count(*) FROM study_point_states") == 3);
+  const std::int64_t interrupted_run = test::count_rows(db, "SELECT run_id FROM study_point_runs WHERE point = 4");
+  CHECK(test::count_rows(
+            db, "SELECT count(*) FROM run_checkpoints WHERE run_id = " + std::to_string(interrupted_run)) == 1);
 
   std::vector<std::int64_t> runs;
   {
@@ -501,14 +510,26 @@ void check_curves_on_shards(
   CHECK(continued_points(studies, id) == std::vector<int>{1});
   write_folder_study(folder, store, record);
   CHECK(test::count_rows(folder.template_store(), "SELECT count(*) FROM study_point_states") == 1);
+  CHECK(test::count_rows(folder.template_store(),
+                         "SELECT count(*) FROM study_point_runs JOIN run_checkpoints USING (run_id) WHERE point = 4 "
+                         "AND attempt = 0 AND run_id = " +
+                             std::to_string(interrupted_run)) == 1);
   CHECK(run_shard_task({folder, 11, 0, 2, {}}, study::PointRunControl{}).points_completed == 2);
-  CHECK(run_shard_task({folder, 11, 1, 4, {}}, study::PointRunControl{}).points_completed == 3);
+  std::vector<std::string> warnings;
+  study::PointRunControl resumed;
+  resumed.warn = [&](const std::string& warning) { warnings.push_back(warning); };
+  CHECK(run_shard_task({folder, 11, 1, 4, {}}, resumed).points_completed == 3);
+  CHECK(warnings.empty());
+  // The task took the store's interrupted run over and continued it from its checkpoint.
+  CHECK(test::count_rows(folder.shard(11, 1), "SELECT run_id FROM study_point_runs WHERE point = 4 AND attempt = 1") ==
+        interrupted_run);
   report = collect_shards(store, record, {folder});
   REQUIRE(report.merged.size() == 2);
   CHECK(report.merged[0].points == 2);
-  // Point 1's final state, the store's; predicted from it again, point 2's start (under the
-  // same key: point 1's run has the id 1 in the first shard and in the store).
-  CHECK(report.merged[0].beds_shared == (predicted_beds ? 2 : 1));
+  // Point 2's start, the store's: point 1's final state, or (start = predict) the start
+  // predicted from it again, whose label names point 1's run by its id in the store, as
+  // the first shard's did once collected.
+  CHECK(report.merged[0].beds_shared == 1);
   CHECK(report.merged[1].points == 3);
   CHECK(report.refused.empty());
   for (int p = 1; p <= 6; ++p) CHECK(status_of(p) == PointStatus::completed);

@@ -309,6 +309,7 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
       {{study, "--slurm", "--partition", ""}, "--partition '': a partition name"},
       {{study, "--slurm", "--threads", "0"}, "--threads '0'"},
       {{study, "--slurm", "--scratch", "$(id)"}, "--scratch '$(id)'"},
+      {{study, "--slurm", "--checkpoint-every", "-1"}, "--checkpoint-every '-1': must be a number of seconds"},
       {{(dir / "absent.ini").string(), "--slurm"}, "cannot be read (no such file)"},
       {{"--resume", "1", "--slurm"}, "does not exist"},
   };

@@ -13,6 +13,7 @@
 #include <map>
 
 #include "commands.hpp"
+#include "options.hpp"
 #include "pdamp/slurm/collect.hpp"
 #include "pdamp/slurm/program.hpp"
 #include "pdamp/slurm/shard_task.hpp"
@@ -42,6 +43,8 @@ SlurmOptions slurm_options(const po::variables_map& vm) {
   }
   o.threads = static_cast<int>(parse_whole_number(vm["threads"].as<std::string>(), 1, 1024, "--threads"));
   if (vm.count("scratch")) o.scratch = parse_scratch(vm["scratch"].as<std::string>());
+  checkpoint_interval(vm);  // checked here, passed on as given
+  o.checkpoint_every = vm["checkpoint-every"].as<std::string>();
   return o;
 }
 
@@ -297,6 +300,7 @@ void add_submit_options(Subcommand& command) {
       "a folder on the compute node to write each shard in, copied to the shard folder at the end, e.g. '$TMPDIR' "
       "(default: written in the shard folder)")("force", "submit a study of more than 1000 points")(
       "dry-run", "print the job script; write and submit nothing");
+  command.add(checkpoint_option());
 }
 
 /// `pdamp study task`'s progress in its log: a line each tenth of the point it runs (a
@@ -413,6 +417,7 @@ int study_task(const std::vector<std::string>& args) {
       "points", po::value<std::string>(), "the array's points, rising, e.g. 1-3,5: task T runs the T-th, from 0")(
       "threads", po::value<std::string>(), "soft-engine threads")(
       "scratch", po::value<std::string>(), "a folder to write the shard in first (node-local scratch)");
+  command.add(checkpoint_option());
   if (!command.parse(args)) return 0;
   const auto& vm = command.vm();
   constexpr long largest = std::numeric_limits<std::int64_t>::max();
@@ -426,6 +431,7 @@ int study_task(const std::vector<std::string>& args) {
   install_stop_handlers();
   study::PointRunControl control;
   control.stop = stop_flag();
+  control.checkpoint_interval = checkpoint_interval(command.vm());
   control.warn = [](const std::string& warning) { std::cerr << "pdamp: warning: " << warning << "\n"; };
   std::cout << "pdamp: task " << request.task << " of job " << request.job << " (point " << request.point << ") on "
             << printable(this_process_lease().host) << ", shard folder " << printable(request.folder.path().string())

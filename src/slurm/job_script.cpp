@@ -214,7 +214,7 @@ std::string job_script(const JobScriptRequest& r) {
   if (!o.time_limit.empty()) s << "#SBATCH --time=" << o.time_limit << "\n";
   s << "exec " << shell_quoted(r.pdamp.string()) << " study task " << shell_quoted(r.folder.path().string())
     << " --job \"$SLURM_ARRAY_JOB_ID\" --task \"$SLURM_ARRAY_TASK_ID\" --points " << array_ranges(r.points)
-    << " --threads \"${SLURM_CPUS_PER_TASK:-1}\"";
+    << " --threads \"${SLURM_CPUS_PER_TASK:-1}\" --checkpoint-every " << shell_quoted(o.checkpoint_every);
   if (!o.scratch.empty()) s << " --scratch \"" << o.scratch << "\"";
   s << "\n";
   return s.str();

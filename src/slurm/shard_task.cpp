@@ -53,7 +53,8 @@ ShardTaskResult run_in_shard(const std::filesystem::path& work, const study::Stu
     return study::stored_point(study, study.points.at(static_cast<std::size_t>(point - 1)));
   };
   const int first = static_cast<int>(r.point);
-  // The folder's study holds the point if the store had completed it: it is not run again.
+  // The folder's study holds the point if the store had completed it (it is not run again)
+  // or had it interrupted with runs to continue.
   if (!studies.point(record.study_id, first)) studies.add_points(record.study_id, {stored(first)});
   std::vector<NewStudyPoint> rest;
   std::vector<int> points{first};  // the curve from `first`, as the study defines it

@@ -1,6 +1,7 @@
 #include "pdamp/store/shard_merge.hpp"
 
 #include <array>
+#include <charconv>
 #include <map>
 #include <memory>
 #include <optional>
@@ -286,7 +287,10 @@ class Merger {
     IdMap attempts;
     for (int a = 1; a <= shard_attempts; ++a) attempts[a] = attempts_before + a;
     std::vector<std::int64_t> runs;
-    sqlite::Statement links(shard_->db(), "SELECT run_id FROM study_point_runs WHERE point = ? ORDER BY run_id");
+    // Runs under attempt 0 are the store's, which the task was given to continue
+    // (copy_end_states): added only once an attempt of the task took them over.
+    sqlite::Statement links(shard_->db(),
+                            "SELECT run_id FROM study_point_runs WHERE point = ? AND attempt > 0 ORDER BY run_id");
     links.bind(1, point);
     while (links.step()) runs.push_back(links.column_int(0));
     sqlite::Statement comparison(shard_->db(), "SELECT comparison_id FROM study_points WHERE point = ?");
@@ -312,7 +316,8 @@ class Merger {
             .copy(*comparison_id);
       }
     }
-    RowCopier(shard_->db(), *store_, "study_point_runs", "point", {{"run_id", &runs_}, {"attempt", &attempts}})
+    RowCopier(shard_->db(), *store_, "study_point_runs", "point", {{"run_id", &runs_}, {"attempt", &attempts}}, {},
+              "attempt > 0")
         .copy(point);
     sqlite::Statement stale(*store_, "DELETE FROM study_point_metrics WHERE study_id = ? AND point = ?");
     stale.bind(1, study_id_).bind(2, point).run();
@@ -373,12 +378,14 @@ class Merger {
       key.bind(1, state);
       if (!key.step())
         throw RuntimeFailure("shard " + quoted(shard_->file()) + " lacks its bed " + std::to_string(state));
-      existing.bind(1, key.column_text(0));
+      const std::string label = store_label(key.column_text(0));
+      existing.bind(1, label);
       if (existing.step()) {
         check_same_bed(state, existing.column_int(0));
         beds_[state] = existing.column_int(0);
         ++result_->beds_shared;
       } else {
+        state_rows.set("settle_key", label);
         state_rows.copy(state, &beds_);
         particle_rows.copy(state);
         ++result_->beds_added;
@@ -386,6 +393,20 @@ class Merger {
       key.reset();
       existing.reset();
     }
+  }
+
+  /// A bed's label in the store: a continued point's predicted start (start = predict)
+  /// names the run it was predicted from, which, if this shard ran it, has another id in
+  /// the store. (A run the folder's study carried has the store's id already.)
+  std::string store_label(const std::string& label) const {
+    static constexpr std::string_view from = " predicted from run ";
+    const auto at = label.rfind(from);
+    if (at == std::string::npos) return label;
+    const char *first = label.data() + at + from.size(), *last = label.data() + label.size();
+    std::int64_t run = 0;
+    if (auto [end, error] = std::from_chars(first, last, run); error != std::errc() || end != last) return label;
+    const auto merged_run = runs_.find(run);
+    return merged_run == runs_.end() ? label : label.substr(0, at + from.size()) + std::to_string(merged_run->second);
   }
 
   /// A bed settled from the same settings in the shard and in the store must be the same
@@ -479,26 +500,68 @@ void copy_end_states(RunStore& store, std::int64_t study_id, const std::vector<i
     RowCopier run_row(from, to, "runs", "run_id", {});
     RowCopier state_row(from, to, "initial_states", "state_id", {});
     RowCopier particle_rows(from, to, "initial_particles", "state_id", {});
+    std::set<std::int64_t> copied;  // beds: a run may start from another point's final state
+    const auto copy_bed = [&](const sqlite::Statement& q, int column) {
+      if (q.is_null(column) || !copied.insert(q.column_int(column)).second) return;
+      state_row.copy(q.column_int(column));
+      particle_rows.copy(q.column_int(column));
+    };
     sqlite::Statement beds(from,
                            "SELECT s.run_id, s.state_id, r.initial_state_id FROM study_point_states s "
                            "JOIN runs r ON r.run_id = s.run_id WHERE s.study_id = ? AND s.point = ?");
-    std::set<std::int64_t> copied;  // beds: a run may start from another point's final state
     for (const int point : points) {
       beds.bind(1, study_id).bind(2, point);
       if (!beds.step()) {
         throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) +
                              " has no final state to continue from");
       }
-      for (const int column : {1, 2}) {
-        if (beds.is_null(column) || !copied.insert(beds.column_int(column)).second) continue;
-        state_row.copy(beds.column_int(column));
-        particle_rows.copy(beds.column_int(column));
-      }
+      copy_bed(beds, 1);
+      copy_bed(beds, 2);
       run_row.copy(beds.column_int(0));
       point_row.copy(point);
       end_row.copy(point);
       metrics_row.copy(point);
       beds.reset();
+    }
+
+    // An interrupted point a task starts from (from the bed, or after a completed point)
+    // with the runs of its latest attempt, under attempt 0: the task's first attempt takes
+    // them over and continues them from their checkpoints (merge_shard adds them then).
+    StudyStore studies(from);
+    const std::map<int, int> previous = studies.previous_points(study_id);
+    const auto completed = [&](int p) {
+      const auto state = studies.point(study_id, p);
+      return state && state->status == PointStatus::completed;
+    };
+    sqlite::Statement runs(from,
+                           "SELECT l.run_id, r.initial_state_id FROM study_point_runs l JOIN runs r USING (run_id) "
+                           "JOIN study_points p ON p.study_id = l.study_id AND p.point = l.point AND "
+                           "p.attempt = l.attempt WHERE l.study_id = ? AND l.point = ? ORDER BY l.run_id");
+    for (const auto& p : studies.points(study_id)) {
+      const auto before = previous.find(p.point);
+      if (p.status != PointStatus::interrupted || (before != previous.end() && !completed(before->second))) continue;
+      runs.bind(1, study_id).bind(2, p.point);
+      std::vector<std::int64_t> run_ids;
+      while (runs.step()) {
+        copy_bed(runs, 1);
+        run_ids.push_back(runs.column_int(0));
+      }
+      runs.reset();
+      if (run_ids.empty()) continue;
+      for (const std::int64_t run : run_ids) run_row.copy(run);
+      for (const std::string_view table : run_tables) {
+        RowCopier rows(from, to, table, "run_id", {});
+        for (const std::int64_t run : run_ids) rows.copy(run);
+      }
+      point_row.copy(p.point);
+      RowCopier(from, to, "study_point_runs", "point", {}, {},
+                this_study + " AND attempt = " + std::to_string(p.attempt))
+          .copy(p.point);
+      for (const char* table : {"study_points", "study_point_runs"}) {
+        sqlite::Statement first(to,
+                                std::string("UPDATE ") + table + " SET attempt = 0 WHERE study_id = ? AND point = ?");
+        first.bind(1, study_id).bind(2, p.point).run();
+      }
     }
   });
 }

@@ -53,6 +53,9 @@ struct SlurmOptions {
   int max_parallel = 0;    ///< tasks run at once (%K); 0: as many as Slurm allows
   int threads = 1;         ///< cores per task (--cpus-per-task): the soft engine's threads
   std::string scratch;     ///< a folder on the node for the shard while it is written; empty: none
+  /// The tasks' --checkpoint-every (seconds, as given and checked): a resubmitted point
+  /// goes on from its checkpoint.
+  std::string checkpoint_every = "60";
 };
 
 /// Each option's value checked; InputError naming the option and what is valid.

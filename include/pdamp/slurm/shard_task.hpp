@@ -32,12 +32,12 @@ struct ShardTaskResult {
 /// the final states a resubmitted curve starts from.
 std::vector<int> continued_points(StudyStore& studies, std::int64_t study_id);
 
-/// Writes the folder's study (study.sqlite): the study's row as `store` holds it, and the
-/// final states of its continued_points (store/shard_merge.hpp's copy_end_states), in one
-/// file without a journal beside it. Replaced whole (renamed into place), so that a task
-/// copying it meanwhile gets the old or the new file, both the same study; a point
-/// completed stays completed, so the new file holds every final state a task queued
-/// before may need.
+/// Writes the folder's study (study.sqlite): the study's row as `store` holds it, the
+/// final states of its continued_points and its interrupted points' runs to continue
+/// (store/shard_merge.hpp's copy_end_states), in one file without a journal beside it.
+/// Replaced whole (renamed into place), so that a task copying it meanwhile gets the old or
+/// the new file, both the same study; a point completed stays completed, so the new file
+/// holds every final state a task queued before may need.
 void write_folder_study(const ShardFolder& folder, RunStore& store, const StudyRecord& study);
 
 /// The folder's study (study.sqlite, written by `pdamp study submit`), read without

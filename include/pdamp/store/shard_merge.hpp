@@ -53,12 +53,17 @@ std::span<const std::string_view> unmerged_tables();
 /// settings.
 ShardMerge merge_shard(RunStore& store, const StudyRecord& study, const std::filesystem::path& shard);
 
-/// Copies the final states of the completed curve points `points` of study `study_id` from
-/// `store` into `target` (a shard folder's study, which each task copies): each point's row,
-/// its final state with its run's row and the run's own bed, a frequency-response point's
-/// metrics (which start = predict predicts from), under the store's ids and
-/// labels, so that a resubmitted curve's task continues from them and collect finds them
-/// the store's. Throws RuntimeFailure for a point without a final state.
+/// Copies what a shard folder's tasks start from out of `store` into `target` (the folder's
+/// study, which each task copies), under the store's ids and labels, so that the tasks
+/// continue from them and collect finds them the store's:
+/// - the final states of the completed curve points `points` of study `study_id`: each
+///   point's row, its final state with its run's row and the run's own bed, a
+///   frequency-response point's metrics (which start = predict predicts from);
+/// - each interrupted point that starts from the bed or from a completed point, with the
+///   runs of its latest attempt (rows, samples, cycles, checkpoints, beds), its row and
+///   links under attempt 0: the task's first attempt resumes them from their checkpoints
+///   (or says why it cannot and runs them again).
+/// Throws RuntimeFailure for a point of `points` without a final state.
 void copy_end_states(RunStore& store, std::int64_t study_id, const std::vector<int>& points, RunStore& target);
 
 }  // namespace pdamp

@@ -58,6 +58,19 @@ std::int64_t orphan_end_states(const std::filesystem::path& db) {
                     "AND state_id NOT IN (SELECT state_id FROM study_point_states)");
 }
 
+/// `pdamp study resume 1 --jobs 2` of the killed study in `killed`: each run that had a
+/// checkpoint is completed by its point.
+void resume_continuing_checkpoints(const std::filesystem::path& killed, const TempDir& dir) {
+  const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
+  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  INFO("runs with a checkpoint before the resume: " << checkpointed);
+  CHECK(checkpointed != "()");
+  CHECK(runs_continued_by_their_points(killed, checkpointed) ==
+        count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
+}
+
 }  // namespace
 
 TEST_CASE("[frf] sections: curves by model, level and direction, each point after the one before") {
@@ -371,14 +384,7 @@ TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKIL
                   {"--checkpoint-every", "0.01"});
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 15);
   CHECK(orphan_end_states(killed) == 0);
-  const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
-  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
-  INFO(resumed.err);
-  REQUIRE(resumed.code == 0);
-  INFO("runs with a checkpoint before the resume: " << checkpointed);
-  CHECK(checkpointed != "()");
-  CHECK(runs_continued_by_their_points(killed, checkpointed) ==
-        count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
+  resume_continuing_checkpoints(killed, dir);
   CHECK(frf_metric_differences(stores.at(1), killed) == 0);
   CHECK(sample_differences(stores.at(1), killed).first == 0);
   CHECK(orphan_end_states(killed) == 0);
@@ -401,14 +407,7 @@ TEST_CASE("a start = predict [frf] study killed in a predicted point and resumed
                   "WHERE r.status <> 'completed' AND f.previous_point IS NOT NULL",
                   {"--checkpoint-every", "0.01"});
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 6);
-  const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
-  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
-  INFO(resumed.err);
-  REQUIRE(resumed.code == 0);
-  INFO("runs with a checkpoint before the resume: " << checkpointed);
-  CHECK(checkpointed != "()");
-  CHECK(runs_continued_by_their_points(killed, checkpointed) ==
-        count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
+  resume_continuing_checkpoints(killed, dir);
   CHECK(frf_metric_differences(reference, killed) == 0);
   CHECK(frf_metric_differences(killed, reference) == 0);
   const auto [differing, compared] = sample_differences(reference, killed);

@@ -121,6 +121,21 @@ void JamResolver::transfer(Self& j, Archive& a) {
 PDAMP_CHECKPOINT_PART(JamResolver);
 
 template <class Self, class Archive>
+void RigidClusters::transfer(Self& c, Archive& a) {
+  a.section("rigid clusters");
+  a.io(c.cluster_);
+  a.io(c.place_);
+  // The clusters' count first: the engine restored into has none yet.
+  auto clusters = static_cast<std::uint64_t>(c.members_.size());
+  a.io(clusters);
+  if constexpr (!std::is_const_v<Self>) c.members_.resize(clusters);
+  for (auto& members : c.members_) a.io(members);
+  a.io(c.unused_);
+  for (auto* count : {&c.joins_, &c.joined_spheres_, &c.departures_}) a.io(*count);
+}
+PDAMP_CHECKPOINT_PART(RigidClusters);
+
+template <class Self, class Archive>
 void HardLedger::transfer(Self& l, Archive& a) {
   a.section("hard ledger");
   for (auto* value : {&l.impact_J, &l.friction_J, &l.viscous_J, &l.excitation_J, &l.t_host_booked_s_}) a.io(*value);
@@ -146,6 +161,8 @@ void HardEngine::transfer(Self& e, Archive& a) {
   a.part(e.books_);
   a.part(e.host_);
   a.part(e.jams_);
+  // Only where they are on, so that a run without them keeps its checkpoint's layout.
+  if (e.clusters_.enabled()) a.part(e.clusters_);
   a.io(e.t_s_);
   a.io(e.events_at_this_instant_);
   a.io(e.events_);

@@ -21,6 +21,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       books_(static_cast<int>(initial.size()), HostModel(scenario).excitation_phase()),
       host_(scenario, initial, flight_, books_),
       jams_(static_cast<int>(initial.size())),
+      clusters_(static_cast<int>(initial.size()), scenario.hard_resting.cluster_speed_m_s),
       laws_(scenario, calibration),
       rest_speed_m_s_(scenario.hard_resting.rest_speed_m_s),
       // A collision cascade through a touching bed can take a few events per contact at
@@ -148,6 +149,10 @@ EngineStatistics HardEngine::statistics() const {
   if (diagnosis_) {
     const EngineStatistics diagnosed = diagnosis_->named();
     named.insert(named.end(), diagnosed.begin(), diagnosed.end());
+  }
+  if (clusters_.enabled()) {
+    const EngineStatistics clustered = clusters_.named();
+    named.insert(named.end(), clustered.begin(), clustered.end());
   }
   return named;
 }
@@ -298,6 +303,8 @@ void HardEngine::collide_spheres(int i, int j) {
   const double approach = dv.dot(n);
   if (diagnosis_) [[unlikely]]
     diagnose(EventDiagnosis::sphere_sphere, i, j, approach);
+  if (clusters_.enabled() && join_clusters(i, j, approach)) [[unlikely]]
+    return;
   const HardContactLaw law = law_for(approach, false, i, j);
   const CollisionOutcome out = walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj), law);
   const Eigen::Vector3d& p = out.impulse_N_s;
@@ -313,9 +320,32 @@ void HardEngine::collide_spheres(int i, int j) {
   predict(j, around_j);
 }
 
+bool HardEngine::join_clusters(int i, int j, double approach_m_s) {
+  if (!clusters_.merges(approach_m_s)) {
+    clusters_.leave(i);
+    clusters_.leave(j);
+    return false;
+  }
+  // The loss splits as the motion at this contact: the other contacts of the two
+  // clusters have none (each moved rigidly).
+  ContactMotion motion;
+  motion.add(i, j, flight_.particles());
+  flight_.sphere(i).last_collision_s = t_s_;
+  flight_.sphere(j).last_collision_s = t_s_;
+  const std::span<const int> members = clusters_.join(i, j);
+  for (const int k : members) {
+    flight_.bring_to_now(k, t_s_);
+    flight_.new_trajectory(k);
+  }
+  merge_into_rigid_body(members, motion.impact_share(), flight_.particles(), books_);
+  for (const int k : members) predict(k);
+  return true;
+}
+
 void HardEngine::merge_jam(int i) {
   const JamResolver::Cluster cluster = jams_.cluster_of(i, [this](int j) { return flight_.sphere(j).riding != 0; });
   for (const int k : cluster.members) {
+    clusters_.leave(k);
     flight_.bring_to_now(k, t_s_);
     flight_.new_trajectory(k);
   }
@@ -343,6 +373,7 @@ void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const Colli
   particles.angular_velocity_rad_s.col(i) += r * n.cross(p) / particles.moment_of_inertia(static_cast<Eigen::Index>(i));
   books_.book(out, i, rider);
   flight_.new_trajectory(i);
+  clusters_.leave(i);
   host_.leave_sets(i);
   host_.take_impulse(-p.z(), t_s_);
   if (host_.prescribed()) {
@@ -446,6 +477,7 @@ void HardEngine::rest_if_slow(int i, const Eigen::Vector3d& normal_from_support,
 }
 
 void HardEngine::attach(int i, int side) {
+  clusters_.leave(i);
   const HostCoupling::Attached attached = host_.attach(i, side, t_s_);
   restart_host(attached.host_after);
   if (attached.bed_deeper) {

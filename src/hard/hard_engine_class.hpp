@@ -16,7 +16,8 @@
 ///   bounds of the host-dependent predictions, the riding spheres and the resting bed;
 /// - JamResolver: the collisions of each instant, and the rigid merge (and sticking to
 ///   the host) of a cluster that keeps colliding at one instant;
-/// - HardLedger: the energy books and the counts of events.
+/// - HardLedger: the energy books and the counts of events;
+/// - RigidClusters (off by default): who moves as one rigid body since a slow collision.
 
 #include <cstdint>
 #include <memory>
@@ -30,6 +31,7 @@
 #include "hard/hard_ledger.hpp"
 #include "hard/host_coupling.hpp"
 #include "hard/jam_resolution.hpp"
+#include "hard/rigid_clusters.hpp"
 #include "pdamp/hard/hard_engine.hpp"
 #include "pdamp/model/engine.hpp"
 #include "pdamp/model/restitution.hpp"
@@ -113,6 +115,10 @@ class HardEngine final : public Engine {
   /// The jammed cluster of i stops all relative motion at once (JamResolver), and sticks
   /// to the host if a wall or the bed holds any of its spheres.
   void merge_jam(int i);
+  /// A collision of free spheres i and j (brought to now) approaching at `approach_m_s`:
+  /// if slower than the cluster speed, their clusters merge into one rigid body, and
+  /// true; else they leave their clusters, and false (the collision is a binary one).
+  bool join_clusters(int i, int j, double approach_m_s);
   void release_bed();
 
   // The host.
@@ -133,6 +139,7 @@ class HardEngine final : public Engine {
   HardLedger books_;
   HostCoupling host_;
   JamResolver jams_;
+  RigidClusters clusters_;
   ContactLaws laws_;
   double rest_speed_m_s_;
   double t_s_ = 0.0;

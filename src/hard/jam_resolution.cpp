@@ -51,10 +51,35 @@ bool JamResolver::record_collision(int i, int j, std::uint8_t hold) {
 }
 
 void JamResolver::merge_rigidly(const Cluster& cluster, PackedParticles& particles, HardLedger& ledger) const {
+  // The loss is split as the contacts' relative motion was: its normal part is impact,
+  // its sliding and rolling part friction.
+  const std::vector<int>& members = cluster.members;
+  ContactMotion motion;
+  for (const int k : members) {
+    for (const int j : partners_[k]) {
+      if (j < k || !std::binary_search(members.begin(), members.end(), j)) continue;
+      motion.add(k, j, particles);
+    }
+  }
+  merge_into_rigid_body(members, motion.impact_share(), particles, ledger);
+}
+
+void ContactMotion::add(int k, int j, const PackedParticles& particles) {
+  const Eigen::Vector3d n = (particles.position_m.col(j) - particles.position_m.col(k)).normalized();
+  const Eigen::Vector3d u = particles.velocity_m_s.col(k) - particles.velocity_m_s.col(j) +
+                            (particles.radius_m[k] * particles.angular_velocity_rad_s.col(k) +
+                             particles.radius_m[j] * particles.angular_velocity_rad_s.col(j))
+                                .cross(n);
+  const double reduced = particles.mass_kg[k] * particles.mass_kg[j] / (particles.mass_kg[k] + particles.mass_kg[j]);
+  normal_ += reduced * u.dot(n) * u.dot(n);
+  total_ += reduced * u.squaredNorm();
+}
+
+void merge_into_rigid_body(std::span<const int> members, double impact_share, PackedParticles& particles,
+                           HardLedger& ledger) {
   // A rigid motion flown ballistically never brings two of its spheres closer, so no
   // collision among them is left; the energy of the relative motion removed is the loss
   // (≥ 0: the rigid motion is the kinetic-energy projection of the old one).
-  const std::vector<int>& members = cluster.members;
   double mass = 0.0;
   Eigen::Vector3d centre = Eigen::Vector3d::Zero(), momentum = Eigen::Vector3d::Zero();
   for (const int k : members) {
@@ -75,24 +100,6 @@ void JamResolver::merge_rigidly(const Cluster& cluster, PackedParticles& particl
     inertia += (moment + m * r.squaredNorm()) * Eigen::Matrix3d::Identity() - m * r * r.transpose();
   }
   const Eigen::Vector3d spin = inertia.llt().solve(angular_momentum);
-  // The loss is split as the contacts' relative motion was: its normal part is impact,
-  // its sliding and rolling part friction.
-  double normal = 0.0, total = 0.0;
-  for (const int k : members) {
-    for (const int j : partners_[k]) {
-      if (j < k || !std::binary_search(members.begin(), members.end(), j)) continue;
-      const Eigen::Vector3d n = (particles.position_m.col(j) - particles.position_m.col(k)).normalized();
-      const Eigen::Vector3d u = particles.velocity_m_s.col(k) - particles.velocity_m_s.col(j) +
-                                (particles.radius_m[k] * particles.angular_velocity_rad_s.col(k) +
-                                 particles.radius_m[j] * particles.angular_velocity_rad_s.col(j))
-                                    .cross(n);
-      const double reduced =
-          particles.mass_kg[k] * particles.mass_kg[j] / (particles.mass_kg[k] + particles.mass_kg[j]);
-      normal += reduced * u.dot(n) * u.dot(n);
-      total += reduced * u.squaredNorm();
-    }
-  }
-  const double impact_share = total > 0.0 ? normal / total : 1.0;
   double loss = 0.0;
   for (const int k : members) {
     // Each sphere's part of the loss is the energy of its own motion removed.

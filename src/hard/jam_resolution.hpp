@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "hard/hard_ledger.hpp"
@@ -22,6 +23,27 @@
 #include "pdamp/model/host.hpp"
 
 namespace pdamp::hard {
+
+/// The relative motion at contacts, to split a rigid merge's loss: normal and total, each
+/// contact's relative velocity squared weighted by the pair's reduced mass.
+class ContactMotion {
+ public:
+  /// The contact of spheres k and j as their records stand.
+  void add(int k, int j, const PackedParticles& particles);
+  /// The normal part's share of the total (1 without relative motion).
+  double impact_share() const { return total_ > 0.0 ? normal_ / total_ : 1.0; }
+
+ private:
+  double normal_ = 0.0, total_ = 0.0;
+};
+
+/// Stops all relative motion of `members` (their records at one instant): a perfectly
+/// inelastic, sticking merge into a rigid body with their momentum and angular momentum.
+/// The energy removed (that of the relative motion, ≥ 0) is booked as impact and friction
+/// in the proportion `impact_share` : 1 − `impact_share` (ContactMotion), each sphere's
+/// part being the energy of its own motion removed.
+void merge_into_rigid_body(std::span<const int> members, double impact_share, PackedParticles& particles,
+                           HardLedger& ledger);
 
 class JamResolver {
  public:
@@ -49,10 +71,8 @@ class JamResolver {
   Cluster cluster_of(int i, Riding riding);
 
   /// Stops all relative motion of the cluster (its spheres' records at this instant):
-  /// a perfectly inelastic, sticking merge into a rigid body with the cluster's momentum
-  /// and angular momentum. The energy removed (that of the relative motion, ≥ 0) is
-  /// booked as impact and friction in the proportion of the normal to the total relative
-  /// velocity at the cluster's contacts.
+  /// merge_into_rigid_body, its loss split by the relative motion at the contacts of this
+  /// instant's collisions.
   void merge_rigidly(const Cluster& cluster, PackedParticles& particles, HardLedger& ledger) const;
   /// A perfectly inelastic, sticking collision of the merged cluster with the host at
   /// `host` (a prescribed one, or a free one carrying `carried_mass_kg` in all): the host

@@ -363,6 +363,10 @@ const std::vector<KeySpec>& key_specs() {
                  "TC model: a collision within this many soft contact times (Hertz, at its approach speed) of an "
                  "earlier collision of a sphere it involves is elastic in the normal direction; 0 = off",
                  number(PDAMP_FIELD(hard_resting.tc_window), non_negative), ""});
+    k.push_back({"hard.cluster_speed_m_s", text(d.hard_resting.cluster_speed_m_s), "m/s",
+                 "rigid clusters: a collision of two free spheres approaching slower than this merges them (and their "
+                 "clusters) into one rigid body, which a sphere leaves when anything else changes its motion; 0 = off",
+                 number(PDAMP_FIELD(hard_resting.cluster_speed_m_s), non_negative), ""});
     for (auto& spec : hard_law_keys("hard_wall", &Scenario::hard_wall, "hard")) k.push_back(spec);
     return k;
   }();

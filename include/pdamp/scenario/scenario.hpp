@@ -94,6 +94,10 @@ struct HardRestingSettings {
   /// (the Hertz contact of the soft law at its approach speed) of an earlier collision of
   /// a sphere it involves is elastic in the normal direction; 0 turns it off.
   double tc_window = 0.0;
+  /// Rigid clusters: a collision of two free spheres approaching slower than this merges
+  /// them (and the clusters they are in) into one rigid body, which a sphere leaves when
+  /// anything else changes its motion; 0 turns it off (docs/hard-engine.md, "Rigid clusters").
+  double cluster_speed_m_s = 0.0;
   bool operator==(const HardRestingSettings&) const = default;
 };
 

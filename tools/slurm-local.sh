@@ -55,9 +55,17 @@ recorded_folder() {
   if [ -f "$state_file" ]; then cat "$state_file"; fi
 }
 
+# The PID this script recorded at launch. Each daemon writes its own PID file elsewhere
+# (daemon_pid_file): a daemon replaces that file during start, and a check reading it then found
+# it missing (CI, munged).
 pid_file() {
   local folder=$1 daemon=$2
   echo "$folder/run/$daemon.pid"
+}
+
+daemon_pid_file() {
+  local folder=$1 daemon=$2
+  echo "$folder/run/$daemon.own.pid"
 }
 
 # PID of the daemon when it runs and is ours: PIDs are reused, so its command line must name the
@@ -94,8 +102,8 @@ CredType=cred/munge
 AuthInfo=socket=$folder/munge/munge.socket
 StateSaveLocation=$folder/state
 SlurmdSpoolDir=$folder/spool
-SlurmctldPidFile=$(pid_file "$folder" slurmctld)
-SlurmdPidFile=$(pid_file "$folder" slurmd)
+SlurmctldPidFile=$(daemon_pid_file "$folder" slurmctld)
+SlurmdPidFile=$(daemon_pid_file "$folder" slurmd)
 SlurmctldLogFile=$folder/log/slurmctld.log
 SlurmdLogFile=$folder/log/slurmd.log
 ProctrackType=proctrack/linuxproc
@@ -151,7 +159,7 @@ start_munged() {
   mungekey --create --keyfile="$folder/munge/munge.key"
   # --force: munged refuses a socket path under world-writable /tmp otherwise.
   launch "$folder" munged --foreground --force --socket="$folder/munge/munge.socket" \
-    --key-file="$folder/munge/munge.key" --pid-file="$(pid_file "$folder" munged)" \
+    --key-file="$folder/munge/munge.key" --pid-file="$(daemon_pid_file "$folder" munged)" \
     --log-file="$folder/log/munged.log" --seed-file="$folder/munge/munged.seed"
   wait_for "munged to answer" 10 munge_answers "$folder"
 }

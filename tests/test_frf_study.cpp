@@ -128,8 +128,27 @@ TEST_CASE("[frf] mistakes: one message naming the line, the key and what is vali
             "[frf] level is not an [frf] key (valid: mode, levels"},
            {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nexcitation.frequency_hz = 3\n",
             "excitation.frequency_hz is set by [frf]"},
-           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost.z0_m = 0, 1\n",
-            "a grid of frequency responses is not supported"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost.z0_m = 0, 0.0\n",
+            "line 8: [frf] host.z0_m: the value '0.0' appears twice (values 1 and 2)"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nparticles.count = 20:10:3\n",
+            "line 8: [frf] particles.count: '20:10:3': the range is reversed"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nparticles.count = 10,, 20\n",
+            "an empty value in the list"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nparticles.count = 10, 20\n"
+                   "host.mass_kg = 1, 2, 3\nzip = particles.count host.mass_kg\n",
+            "line 9: [frf] host.mass_kg has 3 values and particles.count 2: zipped keys (line 10) need as many"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nparticles.count = 10, 20\n"
+                   "zip = particles.count excitation.force_N\n",
+            "line 9: [frf] zip = particles.count excitation.force_N: excitation.force_N is set by [frf]"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nparticles.count = 10, 20\n"
+                   "zip = particles.count host.mass_kg\n",
+            "[frf] zip names host.mass_kg, which has no values in this section"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nparticles.count = 10, 20\n"
+                   "zip = particles.count\n",
+            "a zip names two or more keys to vary together"},
+           {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nparticles.count = 10, 20\n"
+                   "host.mass_kg = 1, 2\nzip = particles.count host.mass_kg\nzip = host.mass_kg particles.count\n",
+            "[frf] zip is given twice"},
            {head + "[frf]\nmode = force\nlevels = 1\nfrequencies = 10\nhost.zz = 1\n",
             "'host.zz' is not a scenario key"},
            {head + "[frf]\nmode = force\nlevels = 1\n", "[frf] needs frequencies"},
@@ -141,6 +160,68 @@ TEST_CASE("[frf] mistakes: one message naming the line, the key and what is vali
   }
 }
 
+TEST_CASE("an [frf] grid: each combination of the keys with several values has its curves, the host alone its own") {
+  const std::string head = "[study]\nscenario = " + small() + "\nmodels = hard\n[frf]\nmode = force\nlevels = 0.05\n" +
+                           "frequencies = 15, 17\nhost_alone = true\nhost.z0_m = 0\n";
+  const Study s = study_of(head + "particles.count = 10, 20\nhost.damping_N_s_m = 0.1, 0.2\n");
+  const FrfSection& f = s.file.frfs.at(0);
+  CHECK(f.settings == std::vector<std::pair<std::string, std::string>>{{"host.z0_m", "0"}});
+  REQUIRE(f.grid.axes.size() == 2);
+  // Four combinations, the last key fastest, a curve of two points each; the host alone
+  // depends on the damping only: two curves.
+  REQUIRE(s.points.size() == 12);
+  CHECK(describe_curve(s.points[0]) ==
+        "hard up (particles.count = 10, host.damping_N_s_m = 0.1), curve 1, step 1 from the bed");
+  CHECK(describe_curve(s.points[3]) ==
+        "hard up (particles.count = 10, host.damping_N_s_m = 0.2), curve 2, step 2 after point 3");
+  CHECK(describe_curve(s.points[7]) ==
+        "hard up (particles.count = 20, host.damping_N_s_m = 0.2), curve 4, step 2 after point 7");
+  CHECK(describe_curve(s.points[8]) == "hard host alone up (host.damping_N_s_m = 0.1), curve 5, step 1 from the bed");
+  CHECK(describe_curve(s.points[11]) ==
+        "hard host alone up (host.damping_N_s_m = 0.2), curve 6, step 2 after point 11");
+  CHECK(describe_values(s.points[5]) ==
+        "host.z0_m = 0, particles.count = 20, host.damping_N_s_m = 0.1, excitation.mode = force, excitation.force_N = "
+        "0.05, excitation.frequency_hz = 17");
+  const Scenario third = point_scenario(s, s.points[2]);
+  CHECK(third.name == "frf/3 (particles.count = 10, host.damping_N_s_m = 0.2)");
+  CHECK(third.particles.count == 10);
+  CHECK(third.host.damping_N_s_m == 0.2);
+  const Scenario alone = point_scenario(s, s.points[10]);
+  CHECK(alone.particles.count == 0);
+  CHECK(alone.host.damping_N_s_m == 0.2);
+
+  // Zipped keys vary together; a key of one value (zipped or not) is set on every point.
+  const Study zipped = study_of(head +
+                                "particles.count = 10, 20\nhost.damping_N_s_m = 0.1, 0.2\nzip = particles.count, "
+                                "host.damping_N_s_m\nhost.mass_kg = 0.05\n");
+  REQUIRE(zipped.points.size() == 8);
+  CHECK(describe_curve(zipped.points[2]) ==
+        "hard up (particles.count = 20, host.damping_N_s_m = 0.2), curve 2, step 1 from the bed");
+  CHECK(point_scenario(zipped, zipped.points[2]).host.mass_kg == 0.05);
+  CHECK(describe_curve(zipped.points[6]) ==
+        "hard host alone up (host.damping_N_s_m = 0.2), curve 4, step 1 from the bed");
+  const Study single = study_of(head +
+                                "particles.count = 10\nhost.damping_N_s_m = 0.1\nzip = particles.count "
+                                "host.damping_N_s_m\n");
+  CHECK(single.file.frfs.at(0).grid.axes.empty());
+  CHECK(single.points.size() == 4);
+  CHECK(describe_curve(single.points[0]) == "hard up, curve 1, step 1 from the bed");
+
+  // A changed grid is a changed study, named by its key.
+  const Study other = study_of(head + "particles.count = 10, 30\nhost.damping_N_s_m = 0.1, 0.2\n");
+  const auto differences = study_differences(s, other);
+  REQUIRE(differences.size() == 1);
+  CHECK(differences[0] == "[frf] particles.count: '10, 30' now, '10, 20' stored");
+
+  // The size limits count the grid's curves.
+  CHECK(error_of([&] {
+          study_of(head + "particles.count = 1:1001:1001\n");
+        }).find("the study has 2004 points, more than the 1000 allowed without --force") != std::string::npos);
+  CHECK(error_of([&] {
+          study_of(head + "particles.count = 1:10000:10000\nhost.mass_kg = 1:10:10\n");
+        }).find("more than 100000 points") != std::string::npos);
+}
+
 TEST_CASE("a bad [frf] study, --snapshots with [frf] and study submit of [frf] exit 2 and write nothing") {
   test::TempDir dir("frf-bad");
   const auto db = dir / "runs.sqlite";
@@ -149,6 +230,9 @@ TEST_CASE("a bad [frf] study, --snapshots with [frf] and study submit of [frf] e
            {frf_study("levels = 0.1\nfrequencies = 10\nmode = base\n"), "[frf] mode is given twice"},
            {frf_study("levels = 0.1\nfrequencies = 10, 20\nrun.max_steps = 1000\n"),
             "excitation.force_N = 0.1, excitation.frequency_hz = 10): run.max_steps = 1000: observing the run"},
+           // A grid value out of range: the first point that has it is named.
+           {frf_study("levels = 0.1\nfrequencies = 10, 20\nhost.mass_kg = 0.05, -1\n"),
+            "point 3 of 4 ([frf] host.z0_m = 0, particles.count = 20, host.mass_kg = -1"},
        }) {
     write_file(file, text);
     const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
@@ -389,6 +473,73 @@ TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKIL
   CHECK(sample_differences(stores.at(1), killed).first == 0);
   CHECK(orphan_end_states(killed) == 0);
   CHECK(count_rows(killed, "SELECT count(*) FROM study_point_states") == 15);
+}
+
+TEST_CASE("an [frf] grid runs each key value's curve on its own: continued within it, the same bits as it alone") {
+  test::TempDir dir("frf-grid");
+  const auto file = dir / "grid.ini";
+  const std::string frf = "levels = 0.2\nfrequencies = 16, 18, 20\nmax_cycles = 30\n";
+  write_file(file, "[study]\nname = grid\nscenario = " + small() +
+                       "\nmodels = hard\n\n[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 10, 20\n" + frf);
+  const auto stores = run_study_per_jobs(file, dir, {1, 2});
+  const auto& db = stores.at(1);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_frf_metrics") == 6);
+  CHECK(frf_metric_differences(db, stores.at(2)) == 0);
+  const auto [differing, compared] = sample_differences(db, stores.at(2));
+  CHECK(compared > 6 * 10);
+  CHECK(differing == 0);
+
+  // Each curve's points continue from their own curve's point before; each curve's first
+  // from its own settled bed.
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM study_frf_points WHERE previous_point IS NOT "
+                   "(CASE WHEN point IN (1, 4) THEN NULL ELSE point - 1 END)") == 0);
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM study_frf f JOIN runs r USING (run_id) JOIN study_point_states s ON "
+                   "s.study_id = f.study_id AND s.point = f.previous_point WHERE r.initial_state_id = s.state_id") ==
+        4);
+  CHECK(count_rows(db,
+                   "SELECT count(DISTINCT r.initial_state_id) FROM study_frf f JOIN runs r USING (run_id) "
+                   "WHERE f.step = 1") == 2);
+  // The key values: in each point's scenario name, its values and its curve's grid.
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM study_frf f JOIN runs r USING (run_id) WHERE f.point = 4 AND "
+                   "r.scenario_name = 'grid/4 (particles.count = 20)' AND f.grid = 'particles.count = 20'") == 1);
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM study_point_values WHERE key = 'particles.count' AND number = "
+                   "CASE WHEN point <= 3 THEN 10 ELSE 20 END") == 6);
+  CHECK(count_rows(db, "SELECT count(*) FROM (SELECT grid FROM study_frf GROUP BY grid, curve)") == 2);
+
+  // The curve of 20 spheres is the same bits as an [frf] study of it alone.
+  const auto alone = dir / "alone.sqlite";
+  const auto alone_file = dir / "alone.ini";
+  write_file(alone_file, frf_study(frf));
+  run_study(alone_file, alone, dir);
+  CHECK(frf_metric_differences(db, alone, 3) == 0);
+  const auto [alone_differing, alone_compared] = sample_differences(db, alone, 3);
+  CHECK(alone_compared > 3 * 10);
+  CHECK(alone_differing == 0);
+
+  // Shown and drawn one curve per key value.
+  const Result shown = pdamp_cli({"study", "show", "1", "--db", db.string()}, dir);
+  CHECK(shown.code == 0);
+  CHECK(shown.out.find("  grid\n") != std::string::npos);
+  CHECK(shown.out.find("particles.count = 10\n") != std::string::npos);
+  const auto png = dir / "grid.png";
+  const Result drawn = pdamp_cli({"study", "plot", "1", "--db", db.string(), "--out", png.string()}, dir);
+  INFO(drawn.err);
+  CHECK(drawn.code == 0);
+  CHECK(std::filesystem::file_size(png) > 10'000);
+
+  // Killed with its workers once a point has a checkpoint, resumed: the same bits.
+  const auto killed = dir / "killed.sqlite";
+  kill_study_when(file, killed, dir, "study_frf", "SELECT (" + std::string(checkpointed_unfinished_runs) + ") > 0",
+                  {"--checkpoint-every", "0.01"});
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") < 6);
+  resume_continuing_checkpoints(killed, dir);
+  CHECK(frf_metric_differences(db, killed) == 0);
+  CHECK(sample_differences(db, killed).first == 0);
+  CHECK(orphan_end_states(killed) == 0);
 }
 
 TEST_CASE("a start = predict [frf] study killed in a predicted point and resumed: from its checkpoint, the same bits") {

@@ -548,6 +548,10 @@ void check_curves_on_shards(
   CHECK(again.already_collected == 4);
 }
 
+std::int64_t frf_differences(const std::filesystem::path& a, const std::filesystem::path& b) {
+  return test::frf_metric_differences(a, b);
+}
+
 }  // namespace
 
 TEST_CASE("an [frf] study on Slurm: a task per curve, a curve resumed from its last completed point, the same bits") {
@@ -555,7 +559,7 @@ TEST_CASE("an [frf] study on Slurm: a task per curve, a curve resumed from its l
   check_curves_on_shards(dir,
                          "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.05, 0.2\n"
                          "frequencies = 15, 17, 19\nmax_cycles = 20\n",
-                         test::frf_metric_differences);
+                         frf_differences);
 }
 
 // Resumed from point 1, the first curve's point 2 is predicted from point 1's metrics, which
@@ -566,7 +570,16 @@ TEST_CASE(
   check_curves_on_shards(dir,
                          "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.05, 0.2\n"
                          "frequencies = 15, 17, 19\nmax_cycles = 20\nstart = predict\n",
-                         test::frf_metric_differences, true);
+                         frf_differences, true);
+}
+
+// A grid of two particle counts: each count's curve is a task of its own.
+TEST_CASE("an [frf] grid on Slurm: a task per curve of each key value, resumed mid-curve, the same bits") {
+  test::TempDir dir("slurm-frf-grid");
+  check_curves_on_shards(dir,
+                         "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20, 10\nlevels = 0.2\n"
+                         "frequencies = 15, 17, 19\nmax_cycles = 20\n",
+                         frf_differences);
 }
 
 TEST_CASE("a [characterise] study on Slurm: a task per curve up the amplitudes, resumed mid-curve, the same bits") {

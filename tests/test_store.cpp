@@ -10,6 +10,7 @@
 #include "pdamp/model/host_only_engine.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/store/run_store.hpp"
+#include "pdamp/store/study_store.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;
@@ -563,4 +564,30 @@ TEST_CASE("a store of schema 11 is migrated: each run's counters go to the colum
   CHECK(store.results(id).samples.at(0).observation.counters == o.counters);
   CHECK(scalar(db, "SELECT count(*) FROM samples WHERE run_id = " + std::to_string(id) +
                        " AND collisions IS NULL AND riding_spheres IS NULL") == 1);
+}
+
+TEST_CASE("a store of schema 14 is migrated: its [frf] points have no grid, and study_frf shows the column") {
+  test::TempDir dir("store-migrate-14");
+  const auto file = dir / "v14.sqlite";
+  {
+    sqlite::Database v14(file);
+    for (int v = 0; v < 14; ++v) v14.exec(schema::migrations()[static_cast<std::size_t>(v)]);
+    v14.exec("PRAGMA user_version = 14");
+    v14.exec(
+        "INSERT INTO studies (name, models, n_points, study_file, study_text, scenario_file, scenario_text, "
+        "pdamp_version, created_at) VALUES ('old', 'hard', 1, 'a', 'b', 'c', 'd', '0.1.0', '2026-01-01')");
+    v14.exec("INSERT INTO study_points (study_id, point, section) VALUES (1, 1, 'frf')");
+    v14.exec(
+        "INSERT INTO study_frf_points (study_id, point, curve, model, direction, host_alone, mode, level, "
+        "frequency_hz, step) VALUES (1, 1, 1, 'hard', 'up', 0, 'force', 0.1, 15, 1)");
+    CHECK(scalar(v14, "SELECT count(*) FROM pragma_table_info('study_frf') WHERE name = 'grid'") == 0);
+  }
+  RunStore store(file);
+  sqlite::Database db(store.file());
+  CHECK(scalar(db, "PRAGMA user_version") == RunStore::schema_version());
+  CHECK(scalar(db, "SELECT count(*) FROM study_frf WHERE grid = '' AND frequency_hz = 15") == 1);
+  const auto rows = StudyStore(store).frf_points(1);
+  REQUIRE(rows.size() == 1);
+  CHECK(rows[0].place.grid.empty());
+  CHECK(rows[0].place.frequency_hz == 15.0);
 }

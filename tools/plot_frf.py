@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Draws a stored frequency-response study ([frf], pdamp study run) as one PNG or SVG:
 the normalised amplitude |X/(F0/K)| (or X/Y under base motion) and the phase against the
-frequency, one curve per model, level and direction (the host alone dashed, points that did
-not settle circled in red), and the bed's apparent mass m_app/m_p and equivalent damping
-c_eq against Gamma. Only completed points are drawn. Reads the store's study_frf view with
+frequency, one curve per model, level, direction and combination of the [frf] section's
+grid keys (the host alone dashed, points that did not settle circled in red), and the bed's
+apparent mass m_app/m_p and equivalent damping c_eq against Gamma. Only completed points are drawn. Reads the store's study_frf view with
 Python's sqlite3; `pdamp study plot` runs this script with Debian's /usr/bin/python3.
 
 usage: tools/plot_frf.py --study ID [--db pdamp.sqlite] [--out FILE.png|.svg]
@@ -17,14 +17,13 @@ PROGRAM = "plot_frf"
 
 
 def curves(db, study):
-    """{curve: (model, direction, host_alone, mode, level, [row...])}, rows by step."""
+    """{curve: (model, direction, host_alone, mode, level, grid, [row...])}, rows by step."""
     found = {}
     for row in db.execute(
-            "SELECT curve, model, direction, host_alone, mode, level, frequency_hz, normalised_amplitude, phase_rad, "
-            "gamma, apparent_mass_ratio, equivalent_damping_N_s_m, settled FROM study_frf "
+            "SELECT curve, model, direction, host_alone, mode, level, grid, frequency_hz, normalised_amplitude, "
+            "phase_rad, gamma, apparent_mass_ratio, equivalent_damping_N_s_m, settled FROM study_frf "
             "WHERE study_id = ? AND status = 'completed' ORDER BY curve, step", (study,)):
-        curve, model, direction, alone, mode, level = row[:6]
-        found.setdefault(curve, (model, direction, alone, mode, level, []))[5].append(row[6:])
+        found.setdefault(row[0], (*row[1:7], []))[6].append(row[7:])
     return found
 
 
@@ -39,20 +38,25 @@ def main():
     found = curves(db, args.study)
     if not found:
         fail(PROGRAM, f"study {args.study} has no completed frequency-response point to draw", 1)
-    levels = sorted({c[4] for c in found.values() if not c[2]})
-    colour = {level: f"C{i}" for i, level in enumerate(levels)}
+    # A colour per level and grid combination; the host alone black, or by its grid values.
+    kinds = sorted({(c[5], c[4]) for c in found.values() if not c[2]})
+    colour = {kind: f"C{i % 10}" for i, kind in enumerate(kinds)}
+    alone_grids = sorted({c[5] for c in found.values() if c[2]})
+    alone_colour = {grid: "black" if len(alone_grids) == 1 else f"C{i % 10}" for i, grid in enumerate(alone_grids)}
     base = any(c[3] == "base" for c in found.values())
     unit = "m" if base else "N"
 
     fig, ((amp, phase), (mass, damping)) = plt.subplots(2, 2, figsize=(13, 9))
     fig.suptitle(f"study {args.study} '{row[0]}': stepped-sine frequency response")
-    for curve, (model, direction, alone, mode, level, rows) in sorted(found.items()):
+    for curve, (model, direction, alone, mode, level, grid, rows) in sorted(found.items()):
         f = [r[0] for r in rows]
-        style = dict(color="black", linestyle="--", marker=None, linewidth=1) if alone else dict(
-            color=colour[level], linestyle="-" if direction == "up" else ":",
+        style = dict(color=alone_colour[grid], linestyle="--", marker=None, linewidth=1) if alone else dict(
+            color=colour[(grid, level)], linestyle="-" if direction == "up" else ":",
             marker="o" if model == "hard" else "s", markersize=3 if direction == "up" else 5,
             markerfacecolor="none" if direction == "down" else None)
         label = "host alone" if alone else f"{model}, {level:g} {unit}, {direction}"
+        if grid:
+            label += f" ({grid})"
         amp.plot(f, [r[1] for r in rows], label=label, **style)
         phase.plot(f, [math.degrees(r[2]) for r in rows], **style)
         unsettled = [r for r in rows if not r[6]]

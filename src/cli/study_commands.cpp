@@ -74,27 +74,21 @@ void point_messages(const StudyPointState& p, std::int64_t id, std::vector<std::
   }
 }
 
-/// A frequency-response study's points: one line each, on its curve, with its metrics.
+/// A frequency-response study's points: one line each, on its curve, with its metrics (and
+/// its curve's grid values, where the study has a grid).
 void print_frf_points(StudyStore& studies, std::int64_t id, std::ostream& out) {
-  TextTable table({{"point", true},
-                   {"curve", true},
-                   {"model"},
-                   {"dir"},
-                   {"level", true},
-                   {"f_Hz", true},
-                   {"status"},
-                   {"settled"},
-                   {"cycles", true},
-                   {"X_norm", true},
-                   {"phase_rad", true},
-                   {"Gamma", true},
-                   {"m_app/m_p", true},
-                   {"c_eq_N_s_m", true},
-                   {"eta", true},
-                   {"wall_s", true}});
+  const auto rows = studies.frf_points(id);
+  const bool grid = std::any_of(rows.begin(), rows.end(), [](const auto& f) { return !f.place.grid.empty(); });
+  std::vector<TextTable::Column> columns{
+      {"point", true},     {"curve", true},      {"model"},           {"dir"},
+      {"level", true},     {"f_Hz", true},       {"status"},          {"settled"},
+      {"cycles", true},    {"X_norm", true},     {"phase_rad", true}, {"Gamma", true},
+      {"m_app/m_p", true}, {"c_eq_N_s_m", true}, {"eta", true},       {"wall_s", true}};
+  if (grid) columns.push_back({"grid"});
+  TextTable table(columns);
   std::vector<std::string> messages;
   const auto states = studies.points(id);
-  for (const auto& f : studies.frf_points(id)) {
+  for (const auto& f : rows) {
     std::vector<std::string> row{std::to_string(f.point),
                                  std::to_string(f.place.curve),
                                  f.place.model + (f.place.host_alone ? " alone" : ""),
@@ -114,6 +108,7 @@ void print_frf_points(StudyStore& studies, std::int64_t id, std::ostream& out) {
     } else {
       row.resize(16, "-");
     }
+    if (grid) row.push_back(f.place.grid);
     table.add_row(row);
     point_messages(states.at(static_cast<std::size_t>(f.point - 1)), id, messages);
   }

@@ -3,6 +3,7 @@
 #include "schema.hpp"
 
 #include <array>
+#include <string>
 
 namespace pdamp::schema {
 namespace {
@@ -434,7 +435,8 @@ CREATE TABLE run_checkpoints (
 
 /// Frequency-response studies ([frf]): each point's place on its curve, its response
 /// metrics, and its final state, which the next point of its curve starts from (the
-/// particles kept as a settled bed is, in initial_states, under a key naming the run).
+/// particles kept as a settled bed is, in initial_states, under a key naming the run); the
+/// study_frf view (study_frf_view) follows.
 constexpr std::string_view v11_frf_studies = R"sql(
 CREATE TABLE study_frf_points (
   study_id        INTEGER NOT NULL,
@@ -489,16 +491,6 @@ CREATE TABLE study_point_states (
   FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
 ) STRICT, WITHOUT ROWID;
 
-CREATE VIEW study_frf AS
-SELECT p.study_id, p.point, p.status, f.curve, f.model, f.direction, f.host_alone, f.mode, f.level, f.frequency_hz,
-       f.step, f.previous_point, m.run_id, m.settled, m.cycles_to_steady, m.cycles_run, m.measured_cycles,
-       m.amplitude_m, m.amplitude_spread_m, m.phase_rad, m.normalised_amplitude, m.gamma, m.impact_J_per_cycle,
-       m.friction_J_per_cycle, m.viscous_J_per_cycle,
-       m.impact_J_per_cycle + m.friction_J_per_cycle + m.viscous_J_per_cycle AS dissipated_J_per_cycle,
-       m.loss_factor, m.apparent_mass_kg, m.apparent_mass_kg / nullif(m.particle_mass_kg, 0) AS apparent_mass_ratio,
-       m.equivalent_damping_N_s_m, m.particle_mass_kg, m.wall_time_s
-FROM study_points p JOIN study_frf_points f ON f.study_id = p.study_id AND f.point = p.point
-LEFT JOIN study_frf_metrics m ON m.study_id = p.study_id AND m.point = p.point;
 )sql";
 
 /// The engines' counters, each with one meaning (EngineCounters), NULL where the run's
@@ -616,13 +608,56 @@ CREATE TABLE comparison_runs (
 ) STRICT;
 )sql";
 
-constexpr std::array<std::string_view, 14> all{
-    v1_runs_samples_cycles,  v2_run_statistics,   v3_initial_states,    v4_comparisons,     v5_solid_fraction,
-    v6_run_ids_never_reused, v7_run_snapshots,    v8_studies,           v9_study_jobs,      v10_run_checkpoints,
-    v11_frf_studies,         v12_engine_counters, v13_characterisation, v14_comparison_runs};
+/// Frequency responses over a grid of scenario keys ([frf] keys with several values): each
+/// point's curve records its values of the grid keys, and the study_frf view, made again
+/// after this (study_frf_view), shows them.
+constexpr std::string_view v15_frf_grids = R"sql(
+ALTER TABLE study_frf_points ADD COLUMN grid TEXT NOT NULL DEFAULT '';  -- 'key = value, ...' of its curve; '': no grid
+DROP VIEW study_frf;
+)sql";
+
+/// The study_frf view, made by migration 11 and again by migration 15 with the curve's
+/// grid values after previous_point: written once, between its two halves.
+constexpr std::string_view study_frf_view_head = R"sql(
+CREATE VIEW study_frf AS
+SELECT p.study_id, p.point, p.status, f.curve, f.model, f.direction, f.host_alone, f.mode, f.level, f.frequency_hz,
+       f.step, f.previous_point, )sql";
+constexpr std::string_view study_frf_view_tail =
+    R"sql(m.run_id, m.settled, m.cycles_to_steady, m.cycles_run, m.measured_cycles,
+       m.amplitude_m, m.amplitude_spread_m, m.phase_rad, m.normalised_amplitude, m.gamma, m.impact_J_per_cycle,
+       m.friction_J_per_cycle, m.viscous_J_per_cycle,
+       m.impact_J_per_cycle + m.friction_J_per_cycle + m.viscous_J_per_cycle AS dissipated_J_per_cycle,
+       m.loss_factor, m.apparent_mass_kg, m.apparent_mass_kg / nullif(m.particle_mass_kg, 0) AS apparent_mass_ratio,
+       m.equivalent_damping_N_s_m, m.particle_mass_kg, m.wall_time_s
+FROM study_points p JOIN study_frf_points f ON f.study_id = p.study_id AND f.point = p.point
+LEFT JOIN study_frf_metrics m ON m.study_id = p.study_id AND m.point = p.point;
+)sql";
+
+std::string study_frf_view(std::string_view grid_column) {
+  return std::string(study_frf_view_head) + std::string(grid_column) + std::string(study_frf_view_tail);
+}
 
 }  // namespace
 
-std::span<const std::string_view> migrations() { return all; }
+std::span<const std::string_view> migrations() {
+  static const std::string v11 = std::string(v11_frf_studies) + study_frf_view("");
+  static const std::string v15 = std::string(v15_frf_grids) + study_frf_view("f.grid, ");
+  static const std::array<std::string_view, 15> all{v1_runs_samples_cycles,
+                                                    v2_run_statistics,
+                                                    v3_initial_states,
+                                                    v4_comparisons,
+                                                    v5_solid_fraction,
+                                                    v6_run_ids_never_reused,
+                                                    v7_run_snapshots,
+                                                    v8_studies,
+                                                    v9_study_jobs,
+                                                    v10_run_checkpoints,
+                                                    v11,
+                                                    v12_engine_counters,
+                                                    v13_characterisation,
+                                                    v14_comparison_runs,
+                                                    v15};
+  return all;
+}
 
 }  // namespace pdamp::schema

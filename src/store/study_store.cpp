@@ -144,7 +144,7 @@ void StudyStore::insert_points(std::int64_t study_id, const std::vector<NewStudy
   sqlite::Statement point(db(), "INSERT INTO study_points (study_id, point, section) VALUES (?, ?, ?)");
   sqlite::Statement frf(db(),
                         "INSERT INTO study_frf_points (study_id, point, curve, model, direction, host_alone, mode, "
-                        "level, frequency_hz, step, previous_point) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+                        "level, frequency_hz, step, previous_point, grid) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   sqlite::Statement value(
       db(), "INSERT INTO study_point_values (study_id, point, key, value, number) VALUES (?, ?, ?, ?, ?)");
   sqlite::Statement characterise(
@@ -168,7 +168,7 @@ void StudyStore::insert_points(std::int64_t study_id, const std::vector<NewStudy
     frf.bind(1, study_id).bind(2, p.point).bind(3, f.curve).bind(4, f.model).bind(5, f.direction);
     frf.bind(6, static_cast<std::int64_t>(f.host_alone)).bind(7, f.mode).bind(8, f.level).bind(9, f.frequency_hz);
     frf.bind(10, f.step).bind(11, f.previous_point > 0 ? std::optional<std::int64_t>(f.previous_point) : std::nullopt);
-    frf.run();
+    frf.bind(12, f.grid).run();
   }
 }
 
@@ -511,7 +511,7 @@ FrfPointResult read_frf_metrics(const sqlite::Statement& q, int first) {
 std::vector<FrfPointRecord> StudyStore::frf_points(std::int64_t study_id) {
   sqlite::Statement q(db(),
                       "SELECT point, status, curve, model, direction, host_alone, mode, level, frequency_hz, step, "
-                      "coalesce(previous_point, 0), " +
+                      "coalesce(previous_point, 0), grid, " +
                           std::string(frf_metric_columns) + " FROM study_frf WHERE study_id = ? ORDER BY point");
   q.bind(1, study_id);
   std::vector<FrfPointRecord> rows;
@@ -527,8 +527,9 @@ std::vector<FrfPointRecord> StudyStore::frf_points(std::int64_t study_id) {
                q.column_double(7),
                q.column_double(8),
                static_cast<int>(q.column_int(9)),
-               static_cast<int>(q.column_int(10))};
-    if (!q.is_null(11)) r.result = read_frf_metrics(q, 11);
+               static_cast<int>(q.column_int(10)),
+               q.column_text(11)};
+    if (!q.is_null(12)) r.result = read_frf_metrics(q, 12);
     rows.push_back(std::move(r));
   }
   return rows;

@@ -6,6 +6,7 @@
 #include <set>
 #include <span>
 
+#include "grid_builder.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/study/study_file.hpp"
 
@@ -24,7 +25,7 @@ constexpr std::array<std::string_view, 6> keys_set_by_frf{"excitation.mode",    
 
 constexpr std::string_view frf_keys =
     "mode, levels, frequencies, direction, host_alone, start, models, consecutive_cycles, amplitude_tolerance, "
-    "phase_tolerance_rad, min_cycles, max_cycles, measured_cycles, or a scenario key section.key";
+    "phase_tolerance_rad, min_cycles, max_cycles, measured_cycles, zip, or a scenario key section.key";
 
 /// Bounds of the steady-state counts: beyond them a point's work or memory has no bound.
 constexpr long max_cycle_cap = 100'000;
@@ -133,9 +134,9 @@ class SteadySectionParser {
     return values;
   }
 
-  /// A scenario key set on every point, with one value.
-  void scenario_key(const std::string& key, const std::string& value,
-                    std::vector<std::pair<std::string, std::string>>& settings) const {
+  /// Refuses what is no scenario key this section may set: a word that is not a key of the
+  /// section, a key the section sets itself, a key no study may set.
+  void check_scenario_key(const std::string& key) const {
     if (key.find('.') == std::string::npos) {
       fail("is not an [" + kind() + "] key (valid: " + std::string(valid_keys_) + ")");
     }
@@ -143,12 +144,6 @@ class SteadySectionParser {
       fail("is set by [" + kind() + "] on every point (from its grid, and the steady-state keys for the run's length)");
     }
     if (const auto why = unsettable_key(key)) fail("is refused: " + *why);
-    if (value.find(',') != std::string::npos) {
-      fail("= " + ini::printable(value) + ": an [" + kind() + "] section sets a scenario key to one value; a grid of " +
-           (kind() == "frf" ? "frequency responses" : "characterisations") +
-           " is not supported (make one study per value)");
-    }
-    settings.emplace_back(key, value);
   }
 
   std::string kind() const { return header_.name.substr(0, header_.name.find('.')); }
@@ -192,7 +187,12 @@ class SteadySectionParser {
 
 class FrfParser : SteadySectionParser {
  public:
-  explicit FrfParser(const ini::Section& header) : SteadySectionParser(header, keys_set_by_frf, frf_keys) {
+  explicit FrfParser(const ini::Section& header)
+      : SteadySectionParser(header, keys_set_by_frf, frf_keys), grid_(header.name, [](const std::string& key) {
+          return std::find(keys_set_by_frf.begin(), keys_set_by_frf.end(), key) == keys_set_by_frf.end()
+                     ? std::nullopt
+                     : std::optional<std::string>(key + " is set by [frf] on every point");
+        }) {
     frf_.section = header.name;
   }
 
@@ -215,19 +215,33 @@ class FrfParser : SteadySectionParser {
       frf_.direction = choice(direction_names, v, "up, down or both");
     } else if (entry.key == "host_alone") {
       frf_.host_alone = flag(v);
+    } else if (entry.key == "zip") {
+      grid_.add(entry);
     } else if (!common_key(entry, frf_.frequencies, frf_.start, frf_.models, frf_.criterion)) {
-      scenario_key(entry.key, v, frf_.settings);
+      check_scenario_key(entry.key);
+      grid_.add(entry);
     }
   }
 
   FrfSection build() const {
     require({"mode", "levels", "frequencies"}, "mode = force or base; levels = F0 in N or Y in m; frequencies in Hz");
     check_criterion(frf_.criterion);
-    return frf_;
+    FrfSection frf = frf_;
+    frf.grid.section = frf.section;
+    // A key of one value is set on every point; the others are the grid's axes.
+    for (auto& axis : grid_.axes()) {
+      if (axis.size() > 1) {
+        frf.grid.axes.push_back(std::move(axis));
+        continue;
+      }
+      for (std::size_t k = 0; k < axis.keys.size(); ++k) frf.settings.emplace_back(axis.keys[k], axis.values[0][k]);
+    }
+    return frf;
   }
 
  private:
   FrfSection frf_;
+  GridBuilder grid_;
 };
 
 /// Keys [characterise] sets itself on every point (and particles.count = 0 with empty = true).
@@ -268,7 +282,13 @@ class CharacteriseParser : SteadySectionParser {
             "continue or bed");
       }
     } else {
-      scenario_key(entry.key, v, c_.settings);
+      check_scenario_key(entry.key);
+      if (v.find(',') != std::string::npos || v.find(':') != std::string::npos) {
+        fail("= " + ini::printable(v) +
+             ": a [characterise] section sets a scenario key to one value; a grid of characterisations is not "
+             "supported (make one study per value)");
+      }
+      c_.settings.emplace_back(entry.key, v);
     }
   }
 

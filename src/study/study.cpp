@@ -16,7 +16,11 @@
 namespace pdamp::study {
 namespace {
 
-std::string point_name(const Study& study, int point) { return study.file.name + "/" + std::to_string(point); }
+std::string point_name(const Study& study, const StudyPoint& point) {
+  const std::string name = study.file.name + "/" + std::to_string(point.point);
+  const std::string grid = point.frf ? describe_grid(*point.frf) : "";
+  return grid.empty() ? name : name + " (" + grid + ")";
+}
 
 void check_name(const std::string& name, const std::string& origin) {
   const bool printable = std::all_of(name.begin(), name.end(), [](unsigned char c) { return c >= 0x20 && c != 0x7f; });
@@ -38,33 +42,84 @@ std::vector<FrfDirection> directions_of(FrfDirection direction) {
   return {direction};
 }
 
-/// The curves of an [frf] section, each (model, level, direction, host alone).
+using KeyValues = std::vector<std::pair<std::string, std::string>>;
+
+/// Every combination of a grid's values, the last axis varying fastest (one, empty, for a
+/// grid without axes).
+std::vector<KeyValues> combinations(const Sweep& grid) {
+  std::vector<KeyValues> all;
+  std::vector<std::size_t> index(grid.axes.size(), 0);
+  for (;;) {
+    KeyValues values;
+    for (std::size_t a = 0; a < grid.axes.size(); ++a) {
+      const auto& axis = grid.axes[a];
+      for (std::size_t k = 0; k < axis.keys.size(); ++k) values.emplace_back(axis.keys[k], axis.values[index[a]][k]);
+    }
+    all.push_back(std::move(values));
+    std::size_t a = grid.axes.size();
+    while (a > 0 && ++index[a - 1] == grid.axes[a - 1].size()) index[--a] = 0;
+    if (a == 0) return all;
+  }
+}
+
+/// A host-alone curve's grid values: those of the keys outside [particles], which a host
+/// without particles does not depend on.
+KeyValues host_alone_grid(KeyValues grid) {
+  std::erase_if(grid, [](const auto& v) { return v.first.starts_with("particles."); });
+  return grid;
+}
+
+/// The curves of an [frf] section: for each combination of its grid keys, each (model,
+/// level, direction); then the host alone's.
 std::vector<FrfPoint> frf_curves(const StudyFile& file, std::size_t section) {
   const FrfSection& frf = file.frfs[section];
   std::vector<FrfPoint> curves;
   const auto models = models_of(frf.models.value_or(file.models));
-  for (const Model model : models) {
-    for (const auto& level : frf.levels) {
-      for (const FrfDirection direction : directions_of(frf.direction)) {
-        curves.push_back({section, 0, model, direction, false, level, "", 0, 0});
+  const auto grid = combinations(frf.grid);
+  for (const auto& values : grid) {
+    for (const Model model : models) {
+      for (const auto& level : frf.levels) {
+        for (const FrfDirection direction : directions_of(frf.direction)) {
+          curves.push_back({section, 0, model, direction, false, level, "", 0, 0, values});
+        }
       }
     }
   }
-  // The host alone is linear: one curve gives its response at every level and direction.
-  if (frf.host_alone)
-    curves.push_back({section, 0, models.front(), FrfDirection::up, true, frf.levels.front(), "", 0, 0});
+  // The host alone is linear: one curve gives its response at every level and direction,
+  // and one per combination of the keys it depends on.
+  if (!frf.host_alone) return curves;
+  std::set<KeyValues> alone;
+  for (const auto& values : grid) {
+    auto own = host_alone_grid(values);
+    if (alone.insert(own).second) {
+      curves.push_back(
+          {section, 0, models.front(), FrfDirection::up, true, frf.levels.front(), "", 0, 0, std::move(own)});
+    }
+  }
   return curves;
 }
 
-std::size_t frf_points(const StudyFile& file) {
-  std::size_t total = 0;
-  for (std::size_t s = 0; s < file.frfs.size(); ++s)
-    total += frf_curves(file, s).size() * file.frfs[s].frequencies.size();
-  return total;
+/// `a * b`, or `limit + 1` if that is more than `limit`.
+std::size_t times_up_to(std::size_t a, std::size_t b, std::size_t limit) {
+  if (a != 0 && b > limit / a) return limit + 1;
+  return std::min(a * b, limit + 1);
 }
 
-std::size_t count_points(const StudyFile& file, bool force, const std::string& origin) {
-  std::size_t total = frf_points(file);
+/// The points of an [frf] section, counted before its curves are made (at most
+/// `limit + 1`): a grid's host-alone curves counted as one per combination.
+std::size_t frf_points_up_to(const FrfSection& frf, StudyModels study_models, std::size_t limit) {
+  const std::size_t combinations = frf.grid.points_up_to(limit);
+  const std::size_t per_combination =
+      models_of(frf.models.value_or(study_models)).size() * directions_of(frf.direction).size() * frf.levels.size();
+  const std::size_t curves =
+      std::min(times_up_to(combinations, per_combination, limit) + (frf.host_alone ? combinations : 0), limit + 1);
+  return times_up_to(curves, frf.frequencies.size(), limit);
+}
+
+/// Refuses a study of more than max_points points before its points are made.
+void check_size(const StudyFile& file, const std::string& origin) {
+  std::size_t total = 0;
+  for (const auto& frf : file.frfs) total += frf_points_up_to(frf, file.models, max_points);
   for (const auto& c : file.characterisations) {
     total += models_of(c.models.value_or(file.models)).size() * c.frequencies.size() * c.amplitudes.size();
   }
@@ -73,28 +128,21 @@ std::size_t count_points(const StudyFile& file, bool force, const std::string& o
     throw InputError(origin + ": the study has more than " + std::to_string(max_points) +
                      " points, the most pdamp runs in one study; split it or use fewer values");
   }
-  if (total > max_points_without_force && !force) {
-    throw InputError(origin + ": the study has " + std::to_string(total) + " points, more than the " +
+}
+
+void check_force(std::size_t points, bool force, const std::string& origin) {
+  if (points > max_points_without_force && !force) {
+    throw InputError(origin + ": the study has " + std::to_string(points) + " points, more than the " +
                      std::to_string(max_points_without_force) +
                      " allowed without --force; check the grid (a zip varies keys together instead of "
                      "combining them) or give --force");
   }
-  return total;
 }
 
 void expand(const Sweep& sweep, std::vector<StudyPoint>& points) {
-  std::vector<std::size_t> index(sweep.axes.size(), 0);
-  for (;;) {
-    StudyPoint p{static_cast<int>(points.size()) + 1, sweep.section, {}, std::nullopt, std::nullopt};
-    for (std::size_t a = 0; a < sweep.axes.size(); ++a) {
-      const auto& axis = sweep.axes[a];
-      for (std::size_t k = 0; k < axis.keys.size(); ++k) p.values.emplace_back(axis.keys[k], axis.values[index[a]][k]);
-    }
-    points.push_back(std::move(p));
-    // The last axis varies fastest.
-    std::size_t a = sweep.axes.size();
-    while (a > 0 && ++index[a - 1] == sweep.axes[a - 1].size()) index[--a] = 0;
-    if (a == 0) return;
+  for (auto& values : combinations(sweep)) {
+    points.push_back(
+        {static_cast<int>(points.size()) + 1, sweep.section, std::move(values), std::nullopt, std::nullopt});
   }
 }
 
@@ -157,6 +205,7 @@ void expand(const StudyFile& file, std::size_t section, std::vector<StudyPoint>&
     if (curve.direction == FrfDirection::down) std::reverse(frequencies.begin(), frequencies.end());
     for (std::size_t i = 0; i < frequencies.size(); ++i) {
       StudyPoint p{static_cast<int>(points.size()) + 1, frf.section, frf.settings, curve, std::nullopt};
+      p.values.insert(p.values.end(), curve.grid.begin(), curve.grid.end());
       p.frf->frequency_hz = frequencies[i];
       p.frf->step = static_cast<int>(i) + 1;
       p.frf->previous = continues(frf.start) && i > 0 ? p.point - 1 : 0;
@@ -191,23 +240,25 @@ void differ(std::vector<std::string>& out, const std::string& what, const std::s
   if (now != stored) out.push_back(what + ": '" + now + "' now, '" + stored + "' stored");
 }
 
-/// Each sweep key's values (as expanded) and zip partners, keyed by "[section] key".
-std::map<std::string, std::string> sweep_keys(const StudyFile& file) {
-  std::map<std::string, std::string> keys;
-  for (const auto& sweep : file.sweeps) {
-    for (const auto& axis : sweep.axes) {
-      for (std::size_t k = 0; k < axis.keys.size(); ++k) {
-        std::string values;
-        for (const auto& tuple : axis.values) values += (values.empty() ? "" : ", ") + tuple[k];
-        if (axis.keys.size() > 1) {
-          values += " (zipped with";
-          for (const auto& other : axis.keys) values += other == axis.keys[k] ? "" : " " + other;
-          values += ")";
-        }
-        keys["[" + sweep.section + "] " + axis.keys[k]] = values;
+/// Each grid key's values (as expanded) and zip partners, keyed by "[section] key".
+void add_grid_keys(const Sweep& grid, std::map<std::string, std::string>& keys) {
+  for (const auto& axis : grid.axes) {
+    for (std::size_t k = 0; k < axis.keys.size(); ++k) {
+      std::string values;
+      for (const auto& tuple : axis.values) values += (values.empty() ? "" : ", ") + tuple[k];
+      if (axis.keys.size() > 1) {
+        values += " (zipped with";
+        for (const auto& other : axis.keys) values += other == axis.keys[k] ? "" : " " + other;
+        values += ")";
       }
+      keys["[" + grid.section + "] " + axis.keys[k]] = values;
     }
   }
+}
+
+std::map<std::string, std::string> sweep_keys(const StudyFile& file) {
+  std::map<std::string, std::string> keys;
+  for (const auto& sweep : file.sweeps) add_grid_keys(sweep, keys);
   return keys;
 }
 
@@ -236,6 +287,7 @@ std::map<std::string, std::string> frf_keys(const StudyFile& file) {
     keys[s + "models"] = f.models ? to_string(*f.models) : "(the study's)";
     keys[s + "steady state"] = describe_criterion(f.criterion);
     for (const auto& [key, value] : f.settings) keys[s + key] = value;
+    add_grid_keys(f.grid, keys);
   }
   return keys;
 }
@@ -305,15 +357,16 @@ Study make_study(StudySource source, bool force) {
   study.file = parse_study_file(source.study_text, origin, source.study_path.stem().string());
   check_name(study.file.name, origin);
   study.source = std::move(source);
-  study.points.reserve(count_points(study.file, force, origin));
+  check_size(study.file, origin);
   for (const auto& sweep : study.file.sweeps) expand(sweep, study.points);
   for (std::size_t s = 0; s < study.file.frfs.size(); ++s) expand(study.file, s, study.points);
   for (std::size_t s = 0; s < study.file.characterisations.size(); ++s) expand_characterisation(study, s, study.points);
+  check_force(study.points.size(), force, origin);
   return study;
 }
 
 Scenario point_scenario(const Study& study, const StudyPoint& point, const std::optional<HostState>& host_start) {
-  ScenarioOverrides overrides{"scenario.name=" + point_name(study, point.point)};
+  ScenarioOverrides overrides{"scenario.name=" + point_name(study, point)};
   for (const auto& [key, value] : point.values) overrides.push_back(key + "=" + value);
   if (point.frf || point.characterise) {
     const SteadyStateCriterion& c = point_criterion(study, point);
@@ -325,7 +378,7 @@ Scenario point_scenario(const Study& study, const StudyPoint& point, const std::
       overrides.push_back("host.v0_m_s=" + exact(host_start->v_m_s));
     }
   }
-  return parse_scenario(study.source.scenario_text, point_name(study, point.point), study.source.scenario_path.string(),
+  return parse_scenario(study.source.scenario_text, point_name(study, point), study.source.scenario_path.string(),
                         overrides, "swept");
 }
 
@@ -343,16 +396,26 @@ std::string describe_curve(const StudyPoint& point) {
   }
   if (!point.frf) return "";
   const FrfPoint& f = *point.frf;
+  const std::string grid = describe_grid(f);
   return std::string(to_string(f.model)) + (f.host_alone ? " host alone" : "") + " " +
-         std::string(to_string(f.direction)) + ", curve " + std::to_string(f.curve) + ", step " +
-         std::to_string(f.step) + (f.previous > 0 ? " after point " + std::to_string(f.previous) : " from the bed");
+         std::string(to_string(f.direction)) + (grid.empty() ? "" : " (" + grid + ")") + ", curve " +
+         std::to_string(f.curve) + ", step " + std::to_string(f.step) +
+         (f.previous > 0 ? " after point " + std::to_string(f.previous) : " from the bed");
 }
 
-std::string describe_values(const StudyPoint& point) {
+namespace {
+
+std::string describe(const KeyValues& values) {
   std::string text;
-  for (const auto& [key, value] : point.values) text += (text.empty() ? "" : ", ") + key + " = " + value;
+  for (const auto& [key, value] : values) text += (text.empty() ? "" : ", ") + key + " = " + value;
   return text;
 }
+
+}  // namespace
+
+std::string describe_values(const StudyPoint& point) { return describe(point.values); }
+
+std::string describe_grid(const FrfPoint& curve) { return describe(curve.grid); }
 
 void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots) {
   if (snapshots && study.file.sweeps.empty()) {

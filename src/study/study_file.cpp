@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "grid_builder.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/scenario/ini.hpp"
@@ -106,124 +107,110 @@ std::string comparable(const std::string& value) {
   return joined;
 }
 
-class SweepBuilder {
- public:
-  explicit SweepBuilder(const ini::Section& header) : header_(header) { sweep_.section = header.name; }
+}  // namespace
 
-  void add(const ini::Entry& entry) {
-    if (entry.key == "zip") {
-      add_zip(entry);
-      return;
-    }
-    if (const auto why = unsettable_key(entry.key)) fail(entry.where, "[" + sweep_.section + "] " + *why);
-    for (const auto& k : keys_) {
-      if (k.key == entry.key) {
-        fail(entry.where, "[" + sweep_.section + "] " + entry.key + " is given twice (first on line " +
-                              std::to_string(k.line) + ")");
-      }
-    }
-    keys_.push_back({entry.key, entry.line, entry.where,
-                     parse_sweep_values(entry.value, entry.where + ": [" + sweep_.section + "] " + entry.key)});
+void GridBuilder::add(const ini::Entry& entry) {
+  if (entry.key == "zip") {
+    add_zip(entry);
+    return;
   }
-
-  Sweep build() {
-    if (keys_.empty()) fail(header_.where, "[" + sweep_.section + "] has no keys: give each key to vary its values");
-    std::set<std::size_t> emitted;
-    for (const auto& k : keys_) {
-      const auto zip = zip_of(k.key);
-      if (!zip) {
-        sweep_.axes.push_back(single_axis(k));
-      } else if (emitted.insert(*zip).second) {
-        sweep_.axes.push_back(zipped_axis(zips_[*zip]));
-      }
+  if (const auto why = refused(entry.key)) fail(entry.where, "[" + section_ + "] " + *why);
+  for (const auto& k : keys_) {
+    if (k.key == entry.key) {
+      fail(entry.where,
+           "[" + section_ + "] " + entry.key + " is given twice (first on line " + std::to_string(k.line) + ")");
     }
-    return sweep_;
   }
+  keys_.push_back({entry.key, entry.line, entry.where,
+                   parse_sweep_values(entry.value, entry.where + ": [" + section_ + "] " + entry.key)});
+}
 
- private:
-  struct Key {
-    std::string key;
-    int line;
-    std::string where;
-    std::vector<std::string> values;
-  };
-  struct Zip {
-    std::vector<std::string> keys;
-    int line;
-    std::string where;
-  };
+std::optional<std::string> GridBuilder::refused(const std::string& key) const {
+  if (auto why = unsettable_key(key)) return why;
+  return also_refused_ ? also_refused_(key) : std::nullopt;
+}
 
-  void add_zip(const ini::Entry& entry) {
-    const auto keys = split_keys(entry.value);
-    const std::string where = "[" + sweep_.section + "] zip = " + entry.value;
-    if (keys.size() < 2) fail(entry.where, where + ": a zip names two or more keys to vary together");
-    for (const auto& key : keys) {
-      if (const auto why = unsettable_key(key)) fail(entry.where, where + ": " + *why);
-      if (std::count(keys.begin(), keys.end(), key) > 1) fail(entry.where, where + ": " + key + " is named twice");
-      if (zip_of(key)) fail(entry.where, where + ": " + key + " is already in another zip");
+std::vector<SweepAxis> GridBuilder::axes() const {
+  std::vector<SweepAxis> axes;
+  std::set<std::size_t> emitted;
+  for (const auto& k : keys_) {
+    const auto zip = zip_of(k.key);
+    if (!zip) {
+      axes.push_back(single_axis(k));
+    } else if (emitted.insert(*zip).second) {
+      axes.push_back(zipped_axis(zips_[*zip]));
     }
-    zips_.push_back({keys, entry.line, entry.where});
   }
+  return axes;
+}
 
-  std::optional<std::size_t> zip_of(const std::string& key) const {
-    for (std::size_t z = 0; z < zips_.size(); ++z) {
-      if (std::find(zips_[z].keys.begin(), zips_[z].keys.end(), key) != zips_[z].keys.end()) return z;
+void GridBuilder::add_zip(const ini::Entry& entry) {
+  const auto keys = split_keys(entry.value);
+  const std::string where = "[" + section_ + "] zip = " + entry.value;
+  if (keys.size() < 2) fail(entry.where, where + ": a zip names two or more keys to vary together");
+  for (const auto& key : keys) {
+    if (const auto why = refused(key)) fail(entry.where, where + ": " + *why);
+    if (std::count(keys.begin(), keys.end(), key) > 1) fail(entry.where, where + ": " + key + " is named twice");
+    if (zip_of(key)) fail(entry.where, where + ": " + key + " is already in another zip");
+  }
+  zips_.push_back({keys, entry.line, entry.where});
+}
+
+std::optional<std::size_t> GridBuilder::zip_of(const std::string& key) const {
+  for (std::size_t z = 0; z < zips_.size(); ++z) {
+    if (std::find(zips_[z].keys.begin(), zips_[z].keys.end(), key) != zips_[z].keys.end()) return z;
+  }
+  return std::nullopt;
+}
+
+const GridBuilder::Key& GridBuilder::key_named(const std::string& name, const Zip& zip) const {
+  for (const auto& k : keys_) {
+    if (k.key == name) return k;
+  }
+  fail(zip.where, "[" + section_ + "] zip names " + name + ", which has no values in this section");
+}
+
+SweepAxis GridBuilder::single_axis(const Key& k) const {
+  SweepAxis axis{{k.key}, {}};
+  std::map<std::string, std::size_t> seen;
+  for (std::size_t i = 0; i < k.values.size(); ++i) {
+    if (const auto [it, fresh] = seen.emplace(comparable(k.values[i]), i); !fresh) {
+      fail(k.where, "[" + section_ + "] " + k.key + ": the value '" + k.values[i] + "' appears twice (values " +
+                        std::to_string(it->second + 1) + " and " + std::to_string(i + 1) + ")");
     }
-    return std::nullopt;
+    axis.values.push_back({k.values[i]});
   }
+  return axis;
+}
 
-  const Key& key_named(const std::string& name, const Zip& zip) const {
-    for (const auto& k : keys_) {
-      if (k.key == name) return k;
+SweepAxis GridBuilder::zipped_axis(const Zip& zip) const {
+  SweepAxis axis{zip.keys, {}};
+  const Key& first = key_named(zip.keys.front(), zip);
+  for (const auto& name : zip.keys) {
+    const Key& k = key_named(name, zip);
+    if (k.values.size() != first.values.size()) {
+      fail(k.where, "[" + section_ + "] " + name + " has " + std::to_string(k.values.size()) + " values and " +
+                        first.key + " " + std::to_string(first.values.size()) + ": zipped keys (line " +
+                        std::to_string(zip.line) + ") need as many values each");
     }
-    fail(zip.where, "[" + sweep_.section + "] zip names " + name + ", which has no values in this section");
   }
-
-  SweepAxis single_axis(const Key& k) const {
-    SweepAxis axis{{k.key}, {}};
-    std::map<std::string, std::size_t> seen;
-    for (std::size_t i = 0; i < k.values.size(); ++i) {
-      if (const auto [it, fresh] = seen.emplace(comparable(k.values[i]), i); !fresh) {
-        fail(k.where, "[" + sweep_.section + "] " + k.key + ": the value '" + k.values[i] + "' appears twice (values " +
-                          std::to_string(it->second + 1) + " and " + std::to_string(i + 1) + ")");
-      }
-      axis.values.push_back({k.values[i]});
-    }
-    return axis;
-  }
-
-  SweepAxis zipped_axis(const Zip& zip) const {
-    SweepAxis axis{zip.keys, {}};
-    const Key& first = key_named(zip.keys.front(), zip);
+  std::map<std::vector<std::string>, std::size_t> seen;
+  for (std::size_t i = 0; i < first.values.size(); ++i) {
+    std::vector<std::string> tuple, key;
     for (const auto& name : zip.keys) {
-      const Key& k = key_named(name, zip);
-      if (k.values.size() != first.values.size()) {
-        fail(k.where, "[" + sweep_.section + "] " + name + " has " + std::to_string(k.values.size()) + " values and " +
-                          first.key + " " + std::to_string(first.values.size()) + ": zipped keys (line " +
-                          std::to_string(zip.line) + ") need as many values each");
-      }
+      tuple.push_back(key_named(name, zip).values[i]);
+      key.push_back(comparable(tuple.back()));
     }
-    std::map<std::vector<std::string>, std::size_t> seen;
-    for (std::size_t i = 0; i < first.values.size(); ++i) {
-      std::vector<std::string> tuple, key;
-      for (const auto& name : zip.keys) {
-        tuple.push_back(key_named(name, zip).values[i]);
-        key.push_back(comparable(tuple.back()));
-      }
-      if (const auto [it, fresh] = seen.emplace(key, i); !fresh) {
-        fail(zip.where, "[" + sweep_.section + "] the zipped values " + std::to_string(it->second + 1) + " and " +
-                            std::to_string(i + 1) + " are the same");
-      }
-      axis.values.push_back(tuple);
+    if (const auto [it, fresh] = seen.emplace(key, i); !fresh) {
+      fail(zip.where, "[" + section_ + "] the zipped values " + std::to_string(it->second + 1) + " and " +
+                          std::to_string(i + 1) + " are the same");
     }
-    return axis;
+    axis.values.push_back(tuple);
   }
+  return axis;
+}
 
-  ini::Section header_;
-  Sweep sweep_;
-  std::vector<Key> keys_;
-  std::vector<Zip> zips_;
-};
+namespace {
 
 /// `kind` or `kind.NAME`, NAME of letters, digits, _ and -.
 bool is_section_of(const std::string& section, std::string_view kind) {
@@ -273,8 +260,8 @@ void check_sections(const ini::Document& document) {
                               "]: a study has sections of one kind, [sweep], [frf] or "
                               "[characterise] ([" +
                               first->name +
-                              "] is there too); a grid of frequency responses or characterisations is not "
-                              "supported: make one study per case");
+                              "] is there too); for frequency responses over a grid of scenario keys, give "
+                              "the keys several values in the [frf] section");
     }
     if (const auto [it, fresh] = seen.emplace(section.name, section.line); !fresh) {
       fail(section.where, "[" + section.name + "] appears twice (first on line " + std::to_string(it->second) + ")");
@@ -295,10 +282,10 @@ StudyFile parse_study_file(const std::string& text, const std::string& origin, c
   StudyFile study;
   study.name = default_name;
   std::map<std::string, int> given;  // [study] keys and their lines
-  std::map<std::string, SweepBuilder> builders;
+  std::map<std::string, GridBuilder> builders;
   std::map<std::string, std::vector<ini::Entry>> frf_entries, characterise_entries;
   for (const auto& section : document.sections) {
-    if (is_sweep_section(section.name)) builders.emplace(section.name, SweepBuilder(section));
+    if (is_sweep_section(section.name)) builders.emplace(section.name, GridBuilder(section.name));
   }
   for (const auto& entry : document.entries) {
     if (is_frf_section(entry.section)) {
@@ -336,7 +323,11 @@ StudyFile parse_study_file(const std::string& text, const std::string& origin, c
     }
   }
   for (const auto& section : document.sections) {
-    if (is_sweep_section(section.name)) study.sweeps.push_back(builders.at(section.name).build());
+    if (is_sweep_section(section.name)) {
+      const GridBuilder& grid = builders.at(section.name);
+      if (grid.empty()) fail(section.where, "[" + section.name + "] has no keys: give each key to vary its values");
+      study.sweeps.push_back({section.name, grid.axes()});
+    }
     if (is_frf_section(section.name)) study.frfs.push_back(parse_frf_section(section, frf_entries[section.name]));
     if (is_characterise_section(section.name)) {
       study.characterisations.push_back(parse_characterise_section(section, characterise_entries[section.name]));

@@ -311,7 +311,8 @@ std::optional<FrfPointRow> frf_row(const Study& study, const StudyPoint& p) {
                      std::stod(f.level),
                      std::stod(f.frequency_hz),
                      f.step,
-                     f.previous};
+                     f.previous,
+                     describe_grid(f)};
 }
 
 std::optional<CharacterisePointRow> characterise_row(const StudyPoint& p) {

@@ -38,6 +38,7 @@ struct FrfPointRow {
   double level = 0.0, frequency_hz = 0.0;
   int step = 0;
   int previous_point = 0;  ///< 0: from the settled bed
+  std::string grid;        ///< its curve's values of the section's grid keys, "key = value, ..."; "": no grid
 };
 
 /// A characterisation point's place on its curve (a row of `study_characterise_points`).

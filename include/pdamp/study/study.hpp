@@ -31,8 +31,9 @@ struct StudySource {
 /// missing or unreadable.
 StudySource read_study_source(const std::filesystem::path& study_file);
 
-/// Where a point of a frequency-response curve sits on it. A curve is one model, level
-/// and direction (or the host alone), its points in the order they run.
+/// Where a point of a frequency-response curve sits on it. A curve is one combination of
+/// the section's grid keys, model, level and direction (or the host alone), its points in
+/// the order they run.
 struct FrfPoint {
   std::size_t section = 0;  ///< in StudyFile::frfs
   int curve = 0;            ///< 1, 2, ... over the study
@@ -42,7 +43,13 @@ struct FrfPoint {
   std::string level, frequency_hz;  ///< as written (F0 in N or Y in m; Hz)
   int step = 0;                     ///< 1, 2, ... along the curve
   int previous = 0;                 ///< the point whose final state this one starts from; 0: the settled bed
+  /// The curve's values of the section's grid keys (FrfSection::grid), in axis order;
+  /// a host-alone curve's without the [particles] keys.
+  std::vector<std::pair<std::string, std::string>> grid;
 };
+
+/// "key = value, key = value" of a curve's grid values ("" without a grid).
+std::string describe_grid(const FrfPoint& curve);
 
 /// Where a point of a characterisation sits: a curve is one model and frequency, its
 /// points along the amplitude axis, ascending.
@@ -83,16 +90,17 @@ struct Study {
 
 /// Parses the study text and expands its points: the sweep sections in file order, each
 /// a grid whose first axis varies slowest; or the [frf] sections in file order, each its
-/// curves (model, then level, then up before down; its host-alone curve last), each
-/// curve's points in the order they run; or the [characterise] sections, each its curves
-/// (model, then frequency), each along the amplitudes, ascending (amplitudes from Γ with
-/// the base scenario's gravity: none is refused). A study over max_points_without_force points
-/// needs `force`; none may exceed max_points. Throws InputError.
+/// curves (each combination of its grid keys, the first axis slowest, then model, then
+/// level, then up before down; its host-alone curves last, one per combination of the
+/// grid keys outside [particles]), each curve's points in the order they run; or the [characterise] sections, each its
+/// curves (model, then frequency), each along the amplitudes, ascending (amplitudes from Γ with the base scenario's
+/// gravity: none is refused). A study over max_points_without_force points needs `force`; none may exceed max_points.
+/// Throws InputError.
 Study make_study(StudySource source, bool force);
 
 /// The point's scenario: the base scenario with the point's values, named
-/// "<study>/<point>". A frequency-response point's run lasts its cap of cycles (the
-/// budget checked is the worst case) with one sample per cycle, and its host starts at
+/// "<study>/<point>" (a point of an [frf] grid: "<study>/<point> (key = value, ...)"). A frequency-response point's run
+/// lasts its cap of cycles (the budget checked is the worst case) with one sample per cycle, and its host starts at
 /// `host_start` if given (the previous point's final state) instead of the base
 /// scenario's host.z0_m and host.v0_m_s. Throws InputError (from the scenario loader) for
 /// a bad value.
@@ -115,7 +123,8 @@ std::vector<std::string> study_differences(const Study& stored, const Study& now
 /// "key = value, key = value" of a point.
 std::string describe_values(const StudyPoint& point);
 
-/// "hard up, curve 2, step 5 after point 11" of a frequency-response point, "hard 17 Hz,
+/// "hard up, curve 2, step 5 after point 11" of a frequency-response point (of a grid:
+/// "hard up (particles.count = 50), curve 2, ..."), "hard 17 Hz,
 /// curve 2, ..." of a characterisation point ("" for another).
 std::string describe_curve(const StudyPoint& point);
 

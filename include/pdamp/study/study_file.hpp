@@ -5,7 +5,10 @@
 ///                   relative to the study file), models = soft | hard | both;
 ///   [sweep]         scenario keys, each with a list of values or a range; the keys form a
 ///   [sweep.NAME]    grid (the first key varies slowest); `zip = KEY KEY ...` varies the
-///                   listed keys together instead. Several sweep sections add their points.
+///                   listed keys together instead. Several sweep sections add their points;
+///   [frf]           stepped-sine response curves (frf_section.cpp), whose scenario keys
+///   [frf.NAME]      with several values form a grid the same way, each combination its curves;
+///   [characterise]  the damper's container driven over amplitudes and frequencies.
 /// A value list separates values with commas, so that a value may hold spaces
 /// (`particles.diameter_m = 0.0008 0.0012, 0.001`); `start:stop:count` is a linear range and
 /// `start:stop:count:log` a geometric one. Parsing checks the file's own structure and its
@@ -71,7 +74,10 @@ struct FrfSection {
   FrfStart start = FrfStart::continuation;
   SteadyStateCriterion criterion;
   std::optional<StudyModels> models;                          ///< the section's own; default [study] models
-  std::vector<std::pair<std::string, std::string>> settings;  ///< scenario keys set on every point
+  std::vector<std::pair<std::string, std::string>> settings;  ///< scenario keys with one value, set on every point
+  /// Scenario keys with several values (and zipped keys): every combination of them has its
+  /// own curves. No axes: one combination, setting nothing.
+  Sweep grid;
 };
 
 /// The amplitude axis of a characterisation: the container's amplitude A (m), or

@@ -213,3 +213,31 @@ TEST_CASE("event queue: a list refilled since its owner changed is trusted only 
   CHECK(popped == 30000);
   CHECK(stale_at_top > 1000);  // out-of-date events did reach the top, and were checked
 }
+
+TEST_CASE("event queue: an owner taken in from beyond the calendar while it scans empty buckets comes back") {
+  // Four buckets. A run of pops sets their width w and restarts the calendar at the last
+  // pop; then two owners wait beyond its reach, at 5.5 w and 7.5 w. The scan for the next
+  // bucket takes the first in after two empty buckets and the second after four: both sit
+  // further ahead than one calendar's length of empty buckets from where the scan began.
+  EventQueue queue(3);
+  const auto current = [](const Event&) { return true; };
+  constexpr int pops = 4 + 64;  // as many as it takes the calendar to time its buckets
+  for (int k = 1; k <= pops; ++k) {
+    queue.push({1e-3 * k, 0, 0, 0, EventKind::side_wall});
+    REQUIRE(queue.top(current) != nullptr);
+    queue.pop();
+  }
+  const double origin_s = 1e-3 * pops, width_s = 4.0 * (origin_s - 1e-3) / pops;
+  const Event first{origin_s + 5.5 * width_s, 1, 0, 0, EventKind::top_cap};
+  const Event second{origin_s + 7.5 * width_s, 2, 0, 0, EventKind::top_cap};
+  queue.push(second);
+  queue.push(first);
+  for (const Event& expected : {first, second}) {
+    const Event* top = queue.top(current);
+    REQUIRE(top != nullptr);
+    CHECK(top->t_s == expected.t_s);
+    CHECK(top->i == expected.i);
+    queue.pop();
+  }
+  CHECK(queue.top(current) == nullptr);
+}

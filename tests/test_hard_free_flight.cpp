@@ -25,8 +25,9 @@ Scenario weightless(int count) {
       std::to_string(count) + "\ndiameter_m = 0.001\n");
 }
 
-/// A host far away: its caps and bed out of reach whatever the sphere does.
-constexpr HostReach unreachable{-1e3, 0.0, 0.0};
+/// The host at rest for good (speed envelope 0) and no bed: out of reach of a sphere that
+/// moves only sideways, between its caps.
+constexpr HostReach unreachable{0.0, 0.0, 0.0};
 
 std::vector<Event> of_kind(const std::vector<Event>& events, EventKind kind) {
   std::vector<Event> found;
@@ -108,6 +109,28 @@ TEST_CASE("free flight: the host check comes when the bed could first be reached
   CHECK(checks[0].t_s == doctest::Approx(0.006).epsilon(1e-12));
   CHECK(flight.predict(0, flight.around(0), 0.0, {0.0, 0.1, 0.001}));
   CHECK(of_kind(test::drain(flight.queue()), EventKind::host_check).empty());
+}
+
+TEST_CASE("free flight: a sphere inside the bed's reach is within reach now, however fast it moves away") {
+  // The sphere's underside 1 mm above the floor, rising at 0.5 m/s, and a bed up to 2 mm
+  // deep: it is among the riders already, so the host's predictions must take over now,
+  // not when a host at the envelope's 0.1 m/s would catch up with it (with gravity: when
+  // it comes back down; without: never), which let it fly into a rider unseen.
+  for (const double g : {0.0, 9.81}) {
+    CAPTURE(g);
+    const Scenario s = test::fixed_walls("[gravity]\ng_m_s2 = " + std::to_string(g) +
+                                         "\n[cavity]\ndiameter_m = 0.02\nheight_m = 0.02\n[particles]\ncount = 1\n"
+                                         "diameter_m = 0.001\n");
+    for (const double vz : {0.5, -0.5}) {
+      CAPTURE(vz);
+      // Rising from the floor's bed, or sinking towards the top cap's (the mirror).
+      const double z = vz > 0 ? r_m + 0.001 : 0.02 - r_m - 0.001;
+      FreeFlight flight(s, test::spheres({Eigen::Vector3d(0.0002, 0, z)}, {Eigen::Vector3d(0, 0, vz)}, r_m));
+      flight.start(flight.particles().unpacked());
+      CHECK(flight.predict(0, flight.around(0), 0.0, {0.0, 0.1, 0.002}));
+      CHECK(of_kind(test::drain(flight.queue()), EventKind::host_check).empty());
+    }
+  }
 }
 
 TEST_CASE("free flight: the side wall is predicted where the sphere's cell reaches it") {

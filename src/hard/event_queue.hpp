@@ -332,7 +332,9 @@ class EventQueue {
   }
   /// Makes the next bucket with entries current; false if there are none.
   bool next_bucket() {
-    for (std::size_t step = 0; step < buckets_.size(); ++step) {
+    // A whole calendar of empty buckets since the last owner came within reach: only then
+    // is every bucket empty (an owner entered from beyond may sit up to reach() − 1 ahead).
+    for (std::size_t empty_steps = 0; empty_steps < buckets_.size(); ++empty_steps) {
       ++current_bucket_;
       // Owners beyond the calendar's reach come within it as it moves on.
       for (; !beyond_.empty(); beyond_.pop()) {
@@ -341,6 +343,7 @@ class EventQueue {
         if (bucket_of(e.t_s) >= current_bucket_ + reach()) break;
         ++keyed_[e.owner].version;
         enter(static_cast<int>(e.owner));
+        empty_steps = 0;
       }
       std::int32_t& head = buckets_[slot_of(current_bucket_)];
       for (std::int32_t owner = head; owner != none; owner = links_[owner].next) {

@@ -209,12 +209,12 @@ inline bool FreeFlight::predict(int i, std::span<const int> new_cells, double t,
   const FaceTimes xy = time_to_faces(Lanes2{x.x() - grid_.x_lower_m(c.ix), x.y() - grid_.x_lower_m(c.iy)},
                                      Lanes2{grid_.x_lower_m(c.ix + 1) - x.x(), grid_.x_lower_m(c.iy + 1) - x.y()},
                                      Lanes2{v.x(), v.y()}, Lanes2{g.x(), g.y()});
-  const Lanes2 to_lower_z =
-      time_to_plane(Lanes2{x.z() - grid_.z_lower_m(c.iz), x.z() - r - host.z_m - host.bed_depth_m},
-                    Lanes2{v.z(), v.z() - envelope}, Lanes2{g.z(), g.z()});
-  const Lanes2 to_upper_z = time_to_plane(
-      Lanes2{grid_.z_lower_m(c.iz + 1) - x.z(), host.z_m + cavity_.height_m() - host.bed_depth_m - x.z() - r},
-      Lanes2{-v.z(), -v.z() - envelope}, Lanes2{-g.z(), -g.z()});
+  const double above_bed = x.z() - r - host.z_m - host.bed_depth_m;
+  const double below_top_bed = host.z_m + cavity_.height_m() - host.bed_depth_m - x.z() - r;
+  const Lanes2 to_lower_z = time_to_plane(Lanes2{x.z() - grid_.z_lower_m(c.iz), above_bed},
+                                          Lanes2{v.z(), v.z() - envelope}, Lanes2{g.z(), g.z()});
+  const Lanes2 to_upper_z = time_to_plane(Lanes2{grid_.z_lower_m(c.iz + 1) - x.z(), below_top_bed},
+                                          Lanes2{-v.z(), -v.z() - envelope}, Lanes2{-g.z(), -g.z()});
   const std::array<double, 6> to_face{c.ix > 0 ? xy.to_lower[0] : never,
                                       c.ix < grid_.nx() - 1 ? xy.to_upper[0] : never,
                                       c.iy > 0 ? xy.to_lower[1] : never,
@@ -263,8 +263,10 @@ inline bool FreeFlight::predict(int i, std::span<const int> new_cells, double t,
 
   // Caps and the resting bed: when the sphere could reach the bed's farthest extent if
   // the host moved at the envelope's speed.
+  // A sphere already inside the bed's reach is within reach now, even receding from its
+  // plane faster than the envelope (time_to_plane would answer when it comes back, or never).
   const double guard = t + std::min(to_lower_z[1], to_upper_z[1]);
-  if (guard <= t) return true;
+  if (std::min(guard - t, std::min(above_bed, below_top_bed)) <= 0.0) return true;
   if (guard < horizon) push({guard, i, 0, 0, EventKind::host_check});
   return false;
 }

@@ -48,6 +48,12 @@ std::int64_t scalar(sqlite::Database& db, const std::string& sql) {
   return query.column_int(0);
 }
 
+/// A store file as schema `version` left it: its migrations run, its user_version set.
+void make_store_of_schema(sqlite::Database& db, int version) {
+  for (int v = 0; v < version; ++v) db.exec(schema::migrations()[static_cast<std::size_t>(v)]);
+  db.exec("PRAGMA user_version = " + std::to_string(version));
+}
+
 std::string file_bytes(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::ostringstream bytes;
@@ -207,8 +213,7 @@ TEST_CASE("an older store is migrated forward and keeps its runs") {
   {
     // A store as the first schema left it, with one run.
     sqlite::Database v1(file);
-    v1.exec(schema::migrations()[0]);
-    v1.exec("PRAGMA user_version = 1");
+    make_store_of_schema(v1, 1);
     v1.exec(
         "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, pdamp_version, "
         "status, started_at) VALUES ('soft', 'old', '', 1, 0, 1.0, '0.0.1', 'completed', '2026-01-01T00:00:00Z')");
@@ -486,8 +491,7 @@ TEST_CASE("a store of schema 5 is migrated: every row kept, and run ids beyond a
   {
     sqlite::Database v5(file);
     v5.exec("PRAGMA journal_mode = WAL");
-    for (int v = 0; v < 5; ++v) v5.exec(schema::migrations()[static_cast<std::size_t>(v)]);
-    v5.exec("PRAGMA user_version = 5");
+    make_store_of_schema(v5, 5);
   }
   {
     // What pdamp 5 wrote: two runs and their rows, a third deleted by hand in the sqlite3
@@ -534,8 +538,7 @@ TEST_CASE("a store of schema 11 is migrated: each run's counters go to the colum
     // contacts open (soft) or spheres riding the host (hard). Here 4, 5 and 6 for a soft
     // run, a hard run and a run of the host alone (no spheres).
     sqlite::Database v11(file);
-    for (int v = 0; v < 11; ++v) v11.exec(schema::migrations()[static_cast<std::size_t>(v)]);
-    v11.exec("PRAGMA user_version = 11");
+    make_store_of_schema(v11, 11);
     for (const char* run : {"'soft', 10", "'hard', 10", "'hard', 0"}) {
       v11.exec(
           "INSERT INTO runs (model, n_particles, scenario_name, scenario_text, seed, duration_s, pdamp_version, "
@@ -571,8 +574,7 @@ TEST_CASE("a store of schema 14 is migrated: its [frf] points have no grid, and 
   const auto file = dir / "v14.sqlite";
   {
     sqlite::Database v14(file);
-    for (int v = 0; v < 14; ++v) v14.exec(schema::migrations()[static_cast<std::size_t>(v)]);
-    v14.exec("PRAGMA user_version = 14");
+    make_store_of_schema(v14, 14);
     v14.exec(
         "INSERT INTO studies (name, models, n_points, study_file, study_text, scenario_file, scenario_text, "
         "pdamp_version, created_at) VALUES ('old', 'hard', 1, 'a', 'b', 'c', 'd', '0.1.0', '2026-01-01')");

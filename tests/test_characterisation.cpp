@@ -124,7 +124,11 @@ TEST_CASE("a bad [characterise] study and --snapshots exit 2, a dry submit write
   CHECK(one.err.find("amplitudes has 1 value") != std::string::npos);
   CHECK(!std::filesystem::exists(db));
   write_file(file, characterise_study("[characterise]\namplitudes = 0.001, 0.002\nfrequencies = 10, 20\n"));
-  check_curve_study_options(file, db, dir, "[characterise]");
+  const Result snapshots = pdamp_cli({"study", "run", file.string(), "--snapshots", "0.01", "--db", db.string()}, dir);
+  CHECK(snapshots.code == 2);
+  CHECK(snapshots.err.find("[characterise]: --snapshots is for [sweep] and [frf] studies only") != std::string::npos);
+  CHECK(!std::filesystem::exists(db));
+  check_curve_study_submit(file, db, dir);
 }
 
 // A bed resting on the floor moves with its container: its force on it is −m_p (z'' + g), so

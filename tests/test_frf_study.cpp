@@ -58,11 +58,14 @@ std::int64_t orphan_end_states(const std::filesystem::path& db) {
                     "AND state_id NOT IN (SELECT state_id FROM study_point_states)");
 }
 
-/// `pdamp study resume 1 --jobs 2` of the killed study in `killed`: each run that had a
-/// checkpoint is completed by its point.
-void resume_continuing_checkpoints(const std::filesystem::path& killed, const TempDir& dir) {
+/// `pdamp study resume 1 --jobs 2 [extra...]` of the killed study in `killed`: each run
+/// that had a checkpoint is completed by its point.
+void resume_continuing_checkpoints(const std::filesystem::path& killed, const TempDir& dir,
+                                   const std::vector<std::string>& extra = {}) {
   const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
-  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
+  std::vector<std::string> args{"study", "resume", "1", "--db", killed.string(), "--jobs", "2"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const Result resumed = pdamp_cli(args, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
   INFO("runs with a checkpoint before the resume: " << checkpointed);
@@ -222,7 +225,7 @@ TEST_CASE("an [frf] grid: each combination of the keys with several values has i
         }).find("more than 100000 points") != std::string::npos);
 }
 
-TEST_CASE("a bad [frf] study, --snapshots with [frf] and study submit of [frf] exit 2 and write nothing") {
+TEST_CASE("a bad [frf] study and too many snapshot frames exit 2 and write nothing; study submit --dry-run neither") {
   test::TempDir dir("frf-bad");
   const auto db = dir / "runs.sqlite";
   const auto file = dir / "frf.ini";
@@ -242,7 +245,14 @@ TEST_CASE("a bad [frf] study, --snapshots with [frf] and study submit of [frf] e
     CHECK(!std::filesystem::exists(db));
   }
   write_file(file, frf_study("levels = 0.1\nfrequencies = 10\n"));
-  check_curve_study_options(file, db, dir, "[frf]");
+  check_curve_study_submit(file, db, dir);
+  // Snapshots whose frames at the cycle boundaries would be too many.
+  write_file(file, frf_study("levels = 0.1\nfrequencies = 10\nmax_cycles = 100000\n"));
+  const Result many = pdamp_cli({"study", "run", file.string(), "--snapshots", "1e-9", "--db", db.string()}, dir);
+  CHECK(many.code == 2);
+  CHECK(many.err.find("--snapshots 1e-09: a point of up to 100010 cycles of 0.1 s, a frame every 1, would take 100011 "
+                      "frames, more than the 100000") != std::string::npos);
+  CHECK(!std::filesystem::exists(db));
 }
 
 TEST_CASE("an [frf] host-alone curve gives the closed-form amplitude, phase and loss factor at every point") {
@@ -540,6 +550,60 @@ TEST_CASE("an [frf] grid runs each key value's curve on its own: continued withi
   CHECK(frf_metric_differences(db, killed) == 0);
   CHECK(sample_differences(db, killed).first == 0);
   CHECK(orphan_end_states(killed) == 0);
+}
+
+namespace {
+
+/// tools/check_snapshots.py on run `run_id`'s collection, against the store `db`.
+void check_with_vtk(const std::filesystem::path& db, std::int64_t run_id, const TempDir& dir) {
+  RunStore store(db, StoreAccess::read);
+  const auto recorded = store.snapshots(run_id);
+  REQUIRE(recorded);
+  const Result r = pdamp_cli({(source_dir() / "tools" / "check_snapshots.py").string(), recorded->collection, "--db",
+                              db.string(), "--run", std::to_string(run_id)},
+                             dir, "/usr/bin/python3");
+  INFO(r.out << r.err);
+  CHECK(r.code == 0);
+}
+
+}  // namespace
+
+TEST_CASE(
+    "snapshots of [frf] points: frames at their cycle boundaries, the same bits as without, after a SIGKILL too") {
+  test::TempDir dir("frf-snapshots");
+  const auto file = dir / "frf.ini";
+  write_file(file, frf_study("levels = 0.2\nfrequencies = 16, 18\nmax_cycles = 30\n"));
+  const auto plain = run_study_per_jobs(file, dir, {1}).at(1);
+  // Every other cycle at 16 Hz (0.1 s / 0.0625 s rounds to 2) and at 18 Hz (1.8 rounds to 2).
+  const auto db = dir / "snapshots.sqlite";
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--snapshots", "0.1",
+                              "--snapshot-dir", (dir / "frames").string()},
+                             dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(frf_metric_differences(plain, db) == 0);
+  CHECK(sample_differences(plain, db).first == 0);
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM run_snapshots s JOIN study_frf f USING (run_id) WHERE s.frames = "
+                   "f.cycles_run / 2 + 1 AND abs(s.interval_s - 2 / f.frequency_hz) <= 1e-15") == 2);
+  for (const std::int64_t run : {1, 2}) check_with_vtk(db, run, dir);
+
+  // Killed once a point has a checkpoint, resumed: its snapshots go on in its folder.
+  const auto killed = dir / "killed.sqlite";
+  const std::vector<std::string> snapshots{"--snapshots", "0.1", "--snapshot-dir", (dir / "killed").string()};
+  std::vector<std::string> killed_run{"--checkpoint-every", "0.01"};
+  killed_run.insert(killed_run.end(), snapshots.begin(), snapshots.end());
+  kill_study_when(file, killed, dir, "study_frf", "SELECT (" + std::string(checkpointed_unfinished_runs) + ") > 0",
+                  killed_run);
+  resume_continuing_checkpoints(killed, dir, snapshots);
+  CHECK(frf_metric_differences(plain, killed) == 0);
+  CHECK(count_rows(killed,
+                   "SELECT count(*) FROM run_snapshots s JOIN study_frf f USING (run_id) WHERE s.frames = "
+                   "f.cycles_run / 2 + 1") == 2);
+  for (const std::int64_t run : {count_rows(killed, "SELECT run_id FROM study_frf WHERE point = 1"),
+                                 count_rows(killed, "SELECT run_id FROM study_frf WHERE point = 2")}) {
+    check_with_vtk(killed, run, dir);
+  }
 }
 
 TEST_CASE("a start = predict [frf] study killed in a predicted point and resumed: from its checkpoint, the same bits") {

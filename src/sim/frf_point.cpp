@@ -102,6 +102,9 @@ RunOutcome run_cycles_simulation(Engine& engine, RunRecorder& recorder, const Ru
     recorder.record_sample(now, error);
     ++outcome.samples;
     outcome.sim_time_s = now.t_s;
+    // The loop observes the engine at its cycle boundaries only: observation step k is the
+    // end of cycle k (snapshots: cycle_frames).
+    if (control.at_observation) control.at_observation(engine, {outcome.samples - 1, true});
     const bool stop = control.stop && control.stop->load();
     if (checkpoints && (stop || clock::now() >= next_checkpoint)) {
       CycleLoopState saved{outcome, state.log};

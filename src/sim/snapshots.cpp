@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -39,6 +40,13 @@ void require_multiple_of_observation_step(double interval_s, const Scenario& sce
       std::to_string(grid.steps_per_sample) + (grid.steps_per_sample == 1 ? " step" : " steps") +
       "), so that the engines run as they do without snapshots; give a whole multiple of it, e.g. " +
       describe(below * grid.step_s) + (above != below ? " or " + describe(above * grid.step_s) : "") + " s");
+}
+
+void require_positive_interval(double interval_s) {
+  if (!std::isfinite(interval_s) || interval_s <= 0.0) {
+    throw InputError("--snapshots " + describe(interval_s) +
+                     ": must be a positive, finite number of seconds of simulated time between frames");
+  }
 }
 
 void require_frames_within_budget(double interval_s, const Scenario& scenario) {
@@ -116,12 +124,23 @@ std::filesystem::path default_snapshot_directory(const std::filesystem::path& st
 }
 
 void check_snapshot_settings(const SnapshotSettings& settings, const Scenario& scenario) {
-  if (!std::isfinite(settings.interval_s) || settings.interval_s <= 0.0) {
-    throw InputError("--snapshots " + describe(settings.interval_s) +
-                     ": must be a positive, finite number of seconds of simulated time between frames");
-  }
+  require_positive_interval(settings.interval_s);
   require_multiple_of_observation_step(settings.interval_s, scenario);
   require_frames_within_budget(settings.interval_s, scenario);
+  require_writable_directory(settings.directory);
+}
+
+void check_cycle_snapshot_settings(const SnapshotSettings& settings, double period_s, std::int64_t max_cycles) {
+  require_positive_interval(settings.interval_s);
+  const FrameGrid frames = cycle_frames(settings.interval_s, period_s);
+  const std::int64_t count = max_cycles / frames.steps_per_frame + 1;
+  if (count > max_snapshot_frames) {
+    throw InputError("--snapshots " + describe(settings.interval_s) + ": a point of up to " +
+                     std::to_string(max_cycles) + " cycles of " + describe(period_s) + " s, a frame every " +
+                     std::to_string(frames.steps_per_frame) + ", would take " + std::to_string(count) +
+                     " frames, more than the " + std::to_string(max_snapshot_frames) +
+                     " a run may write (docs/snapshots.md); give a longer interval");
+  }
   require_writable_directory(settings.directory);
 }
 
@@ -158,21 +177,35 @@ void check_resumable_snapshots(const SnapshotFiles& files, double interval_s, co
   }
 }
 
+FrameGrid run_loop_frames(double interval_s, const Scenario& scenario) {
+  return {observation_grid(scenario), steps_per_frame(interval_s, scenario)};
+}
+
+FrameGrid cycle_frames(double interval_s, double period_s) {
+  return {{1, period_s, period_s}, std::max<std::int64_t>(1, std::llround(interval_s / period_s))};
+}
+
 SnapshotWriter::SnapshotWriter(const SnapshotSettings& settings, const Scenario& scenario, std::int64_t run_id)
+    : SnapshotWriter(settings, scenario, run_id, run_loop_frames(settings.interval_s, scenario)) {}
+
+SnapshotWriter::SnapshotWriter(const SnapshotSettings& settings, const Scenario& scenario, std::int64_t run_id,
+                               const FrameGrid& frames)
     : files_(prepared(snapshot_files(settings, run_id))),
       cavity_(scenario.cavity),
-      grid_(observation_grid(scenario)),
-      steps_per_frame_(steps_per_frame(settings.interval_s, scenario)),
+      frames_at_(frames),
       collection_(files_.collection) {}
 
 SnapshotWriter::SnapshotWriter(const SnapshotFiles& files, double interval_s, const Scenario& scenario,
                                std::int64_t checkpoint_step)
+    : SnapshotWriter(files, scenario, run_loop_frames(interval_s, scenario), checkpoint_step) {}
+
+SnapshotWriter::SnapshotWriter(const SnapshotFiles& files, const Scenario& scenario, const FrameGrid& frames,
+                               std::int64_t checkpoint_step)
     : files_(files),
       cavity_(scenario.cavity),
-      grid_(observation_grid(scenario)),
-      steps_per_frame_(steps_per_frame(interval_s, scenario)),
-      collection_(files_.collection, trim_to(checkpoint_step / steps_per_frame_ + 1)),
-      frames_(checkpoint_step / steps_per_frame_ + 1) {}
+      frames_at_(frames),
+      collection_(files_.collection, trim_to(checkpoint_step / frames.steps_per_frame + 1)),
+      frames_(checkpoint_step / frames.steps_per_frame + 1) {}
 
 std::vector<vtk::Collection::DataSet> SnapshotWriter::trim_to(std::int64_t kept) const {
   // Frames are written in order, spheres first: those after the checkpoint run on from it.
@@ -188,7 +221,7 @@ std::vector<vtk::Collection::DataSet> SnapshotWriter::trim_to(std::int64_t kept)
   }
   std::vector<vtk::Collection::DataSet> data_sets;
   for (std::int64_t frame = 0; frame < kept; ++frame) {
-    const double t_s = grid_.time_s(frame * steps_per_frame_);
+    const double t_s = frames_at_.grid.time_s(frame * frames_at_.steps_per_frame);
     data_sets.push_back({t_s, 0, frame_file("spheres", frame)});
     data_sets.push_back({t_s, 1, frame_file("cavity", frame)});
   }
@@ -196,7 +229,8 @@ std::vector<vtk::Collection::DataSet> SnapshotWriter::trim_to(std::int64_t kept)
 }
 
 void SnapshotWriter::at_observation(const Engine& engine, const ObservationStep& step) {
-  if (step.on_grid && step.index % steps_per_frame_ == 0) write_frame(engine, step.index / steps_per_frame_);
+  const std::int64_t every = frames_at_.steps_per_frame;
+  if (step.on_grid && step.index % every == 0) write_frame(engine, step.index / every);
 }
 
 void SnapshotWriter::write_frame(const Engine& engine, std::int64_t frame) {

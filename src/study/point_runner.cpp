@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <vector>
 
@@ -168,7 +169,8 @@ class PointExecution {
   /// from the previous point's final state `from` (moved by `shift`) or from the settled
   /// bed, into the store linked to the point; or the run an earlier attempt left, resumed.
   StoredRun run_cycles(const Scenario& scenario, Model model, const RunPlan& plan, const ResumedBody& resumed,
-                       const std::optional<FrfEndState>& from, const std::optional<HostState>& shift = {}) {
+                       const std::optional<FrfEndState>& from, const std::optional<HostState>& shift = {},
+                       const std::function<void(std::int64_t run_id)>& created = {}) {
     std::optional<InitialBed> bed;
     const BedSource bed_source = [&]() -> const InitialBed& {
       if (!bed && from) bed = continued_bed(*from, shift);
@@ -178,8 +180,10 @@ class PointExecution {
     const RunControl run_control =
         run_control_for([&, duration = scenario.run.duration_s](double t) { report(t / duration, name); });
     if (auto run = continue_earlier_run(name, run_control, resumed, false)) return *run;
-    return run_and_store(*store_, plan, bed_source, run_control, control_->warn,
-                         [&](std::int64_t run_id) { studies_.link_run(study_id_, point_, attempt_, name, run_id); });
+    return run_and_store(*store_, plan, bed_source, run_control, control_->warn, [&](std::int64_t run_id) {
+      studies_.link_run(study_id_, point_, attempt_, name, run_id);
+      if (created) created(run_id);
+    });
   }
 
   /// A frequency-response point: from the previous point's final state (continuation) or
@@ -194,15 +198,36 @@ class PointExecution {
     const Scenario scenario = point_scenario(*study_, point, host);
     RunPlan plan = plan_run(frf.model, scenario);
     FrfRun frf_run;
+    // Snapshots at the cycle boundaries (cycle_frames): a new run's, or those of the run an
+    // earlier attempt left, continued from its checkpoint.
+    const double period_s = 2.0 * std::numbers::pi / FrfDrive::of(scenario).omega_rad_s;
+    std::optional<SnapshotWriter> frames;
+    const std::optional<std::int64_t> earlier = studies_.earlier_run(study_id_, point_, attempt_, to_string(frf.model));
     const auto [body, resumed] = cycle_bodies(
         [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s, RunRecorder& recorder,
                                                          const RunControl& c, const CycleLoopState* resume) {
-          return run_frf_simulation(engine, s, recorder, c, criterion, frf_run, resume);
+          const auto recorded = resume && earlier ? store_->snapshots(*earlier) : std::nullopt;
+          if (recorded) {
+            frames.emplace(SnapshotFiles{recorded->folder, recorded->collection}, s,
+                           cycle_frames(recorded->interval_s, period_s), resume->outcome.samples - 1);
+          }
+          RunControl observed = c;
+          if (frames) {
+            observed.at_observation = [&frames](const Engine& e, const ObservationStep& step) {
+              frames->at_observation(e, step);
+            };
+          }
+          return run_frf_simulation(engine, s, recorder, observed, criterion, frf_run, resume);
         });
     plan.body = body;
     PointRuns result;
-    result.runs.push_back(run_cycles(scenario, frf.model, plan, resumed, from, shift));
+    result.runs.push_back(run_cycles(scenario, frf.model, plan, resumed, from, shift, [&](std::int64_t run_id) {
+      if (!control_->snapshots) return;
+      frames.emplace(*control_->snapshots, scenario, run_id, cycle_frames(control_->snapshots->interval_s, period_s));
+      record_snapshots(run_id, *frames);
+    }));
     const StoredRun& run = result.runs.back();
+    if (frames) record_snapshots(run.run_id, *frames);
     if (run.outcome.status != RunStatus::completed) return result;
     const State& end = frf_run.final_state;
     result.frf = FrfPointResult{run.run_id,
@@ -213,6 +238,13 @@ class PointExecution {
                                 {run.run_id, 0, end.observation.t_s, end.observation.host}};
     result.end_spheres = end.particles;
     return result;
+  }
+
+  /// Where run `run_id`'s snapshots are, their interval and how many frames there are.
+  void record_snapshots(std::int64_t run_id, const SnapshotWriter& frames) {
+    const SnapshotFiles& files = frames.files();
+    store_->save_snapshots(
+        run_id, {files.folder.string(), files.collection.string(), frames.frame_grid().interval_s(), frames.frames()});
   }
 
   /// With start = predict, how far a continued point moves the host and its bed from the

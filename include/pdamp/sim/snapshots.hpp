@@ -45,6 +45,11 @@ std::filesystem::path default_snapshot_directory(const std::filesystem::path& st
 /// Throws InputError naming the value, why it is wrong and what is valid.
 void check_snapshot_settings(const SnapshotSettings& settings, const Scenario& scenario);
 
+/// check_snapshot_settings for a point run cycle by cycle (cycle_frames), of up to
+/// `max_cycles` cycles of `period_s`: the interval positive and finite, the frames within
+/// max_snapshot_frames, the directory writable. Throws InputError naming the value.
+void check_cycle_snapshot_settings(const SnapshotSettings& settings, double period_s, std::int64_t max_cycles);
+
 /// Where a run's snapshots are.
 struct SnapshotFiles {
   std::filesystem::path folder;      ///< DIR/run-<id>, absolute
@@ -59,13 +64,32 @@ SnapshotFiles snapshot_files(const SnapshotSettings& settings, std::int64_t run_
 void check_resumable_snapshots(const SnapshotFiles& files, double interval_s, const Scenario& scenario,
                                std::int64_t run_id, std::int64_t checkpoint_step);
 
-/// Writes one run's frames at the run loop's observations (RunControl::at_observation).
+/// The observations a run's frames are taken at: every `steps_per_frame`-th step of `grid`.
+struct FrameGrid {
+  ObservationGrid grid;
+  std::int64_t steps_per_frame = 1;
+  double interval_s() const { return grid.time_s(steps_per_frame); }
+};
+
+/// The run loop's: every `interval_s` (a whole multiple of its observation step, checked by
+/// check_snapshot_settings).
+FrameGrid run_loop_frames(double interval_s, const Scenario& scenario);
+
+/// A point run cycle by cycle (sim/frf_point.hpp), observed only at its cycle boundaries,
+/// `period_s` apart: where its engine stops anyway, so that snapshots change nothing of
+/// its results. A frame every max(1, round(interval_s / period_s)) cycles.
+FrameGrid cycle_frames(double interval_s, double period_s);
+
+/// Writes one run's frames at its observations (RunControl::at_observation).
 /// Frame k is taken at observation step k × steps per frame, at that step's time.
 class SnapshotWriter {
  public:
-  /// Creates the run's folder and an empty collection. Throws RuntimeFailure if the
-  /// folder cannot be made or already holds files (of a run of another store).
+  /// Creates the run's folder and an empty collection, for frames at `frames` (default:
+  /// the run loop's, every settings.interval_s). Throws RuntimeFailure if the folder cannot
+  /// be made or already holds files (of a run of another store).
   SnapshotWriter(const SnapshotSettings& settings, const Scenario& scenario, std::int64_t run_id);
+  SnapshotWriter(const SnapshotSettings& settings, const Scenario& scenario, std::int64_t run_id,
+                 const FrameGrid& frames);
 
   /// Continues the snapshots of a run resumed from its checkpoint at observation step
   /// `checkpoint_step` (checked by check_resumable_snapshots): keeps the frames up to the
@@ -73,12 +97,15 @@ class SnapshotWriter {
   /// written again, the same bytes) and lists the kept ones in a new collection. Throws
   /// RuntimeFailure naming a file that cannot be removed or written.
   SnapshotWriter(const SnapshotFiles& files, double interval_s, const Scenario& scenario, std::int64_t checkpoint_step);
+  SnapshotWriter(const SnapshotFiles& files, const Scenario& scenario, const FrameGrid& frames,
+                 std::int64_t checkpoint_step);
 
   /// Writes a frame if this observation is at a multiple of the interval. Throws
   /// RuntimeFailure naming the file that cannot be written.
   void at_observation(const Engine& engine, const ObservationStep& step);
 
   const SnapshotFiles& files() const { return files_; }
+  const FrameGrid& frame_grid() const { return frames_at_; }
   std::int64_t frames() const { return frames_; }
 
  private:
@@ -88,8 +115,7 @@ class SnapshotWriter {
 
   SnapshotFiles files_;
   Cavity cavity_;
-  ObservationGrid grid_;
-  std::int64_t steps_per_frame_;
+  FrameGrid frames_at_;
   vtk::Collection collection_;
   std::int64_t frames_ = 0;
 };

@@ -225,7 +225,7 @@ TEST_CASE("an [frf] grid: each combination of the keys with several values has i
         }).find("more than 100000 points") != std::string::npos);
 }
 
-TEST_CASE("a bad [frf] study and too many snapshot frames exit 2 and write nothing; study submit --dry-run neither") {
+TEST_CASE("a bad [frf] study and too many snapshot frames exit 2 and write nothing, study submit --dry-run neither") {
   test::TempDir dir("frf-bad");
   const auto db = dir / "runs.sqlite";
   const auto file = dir / "frf.ini";

@@ -29,8 +29,7 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       stall_limit_(1000 * static_cast<std::int64_t>(initial.size()) + 100000),
       max_events_(scenario.run.max_events),
       next_poll_(std::min(poll_interval, max_events_ + 1)),
-      check_events_(1024 * (static_cast<std::int64_t>(initial.size()) + 16)),
-      next_check_event_(check_events_) {
+      next_check_event_(check_events()) {
   // A bed settled with soft contacts overlaps by a tiny fraction of a radius: the hard
   // engine starts from it with the spheres pushed just apart.
   Particles separated = initial;
@@ -82,7 +81,7 @@ void HardEngine::check_overlaps(double t_s) {
 #ifdef NDEBUG
   if (events_ < next_check_event_ && ++calls_since_check_ < check_calls) return;
 #endif
-  next_check_event_ = events_ + check_events_;
+  next_check_event_ = events_ + check_events();
   calls_since_check_ = 0;
   if (const double overlap = max_overlap_m(); overlap > overlap_tolerance_m()) {
     std::ostringstream why;

@@ -108,7 +108,7 @@ class HardEngine final : public Engine {
   void rebuild_predictions();
 
   /// Throws if spheres overlap beyond the tolerance at the end of advance_to: every time
-  /// in Debug builds, in release builds once check_events_ events or check_calls calls
+  /// in Debug builds, in release builds once check_events() events or check_calls calls
   /// have passed since the last check.
   void check_overlaps(double t_s);
 
@@ -157,10 +157,10 @@ class HardEngine final : public Engine {
   std::int64_t events_ = 0;
   std::int64_t max_events_;
   std::int64_t next_poll_;
-  /// Some 1024 events per sphere between two overlap checks keep them near 0.1 % of a run
-  /// (docs/hard-engine.md, "Overlaps"); the calls catch a run whose events stopped. Not
+  /// Some 1024 events per sphere between two overlap checks keep them a small fraction of a
+  /// run (docs/hard-engine.md, "Overlaps"); the calls catch a run whose events stopped. Not
   /// state: a resumed run checks anew.
-  std::int64_t check_events_;
+  std::int64_t check_events() const { return 1024 * (static_cast<std::int64_t>(flight_.size()) + 16); }
   static constexpr int check_calls = 1024;
   std::int64_t next_check_event_;
   int calls_since_check_ = 0;

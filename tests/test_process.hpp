@@ -94,6 +94,11 @@ class Process {
     wait();
     return -1;
   }
+  /// Whether the process has ended (it stays to be waited for).
+  bool has_exited() const {
+    siginfo_t info{};
+    return waitid(P_PID, static_cast<id_t>(pid_), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid == pid_;
+  }
   /// The largest resident set the process had (kB), once it has been waited for.
   long peak_memory_kB() const { return peak_memory_kB_; }
   void signal(int number) const { kill(pid_, number); }
@@ -149,20 +154,46 @@ inline std::map<int, std::filesystem::path> run_study_per_jobs(const std::filesy
   return stores;
 }
 
+/// Whether the count `ready_sql` on `store` is not 0, once the store has the view `view`;
+/// false while the store is missing, being created or locked.
+inline bool store_is_ready(const std::filesystem::path& store, const std::string& view, const std::string& ready_sql) {
+  if (!std::filesystem::exists(store)) return false;
+  try {
+    sqlite::Database d(store, sqlite::Access::read_only, std::chrono::milliseconds(50));
+    const auto count = [&](const std::string& sql) {
+      sqlite::Statement q(d, sql);
+      q.step();
+      return q.column_int(0);
+    };
+    return count("SELECT count(*) FROM sqlite_schema WHERE name = '" + view + "'") && count(ready_sql);
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 /// `pdamp study run FILE --jobs 2 [extra...]` into `store`, killed with its workers by
-/// SIGKILL once the store has the view `view` and the count `ready_sql` is not 0 (or after 30 s).
+/// SIGKILL once the store has the view `view` and the count `ready_sql` is not 0 (or after
+/// 60 s). The study runs in slices of a few milliseconds and is stopped (SIGSTOP) while the
+/// store is read, so that a state lasting one cycle of the study's own time is seen however
+/// busy the machine: polling a running study missed a point's last checkpoint before its
+/// completion. Wall time passes while it is stopped, so its wall-time checkpoints come at
+/// nearly every cycle boundary. A read that meets a writer stopped inside an update of the
+/// WAL index waits in SQLite (up to about 10 s) and fails; the study then runs another slice.
 inline void kill_study_when(const std::filesystem::path& file, const std::filesystem::path& store, const TempDir& dir,
                             const std::string& view, const std::string& ready_sql,
                             const std::vector<std::string>& extra = {}) {
   std::vector<std::string> args{"study", "run", file.string(), "--db", store.string(), "--jobs", "2"};
   args.insert(args.end(), extra.begin(), extra.end());
   Process study(args, dir, "study", Group::own);
-  for (int i = 0; i < 3000 && !(std::filesystem::exists(store) &&
-                                count_rows(store, "SELECT count(*) FROM sqlite_schema WHERE name = '" + view + "'") &&
-                                count_rows(store, ready_sql));
-       ++i) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  bool ready = false;
+  while (!ready && !study.has_exited() && std::chrono::steady_clock::now() < give_up) {
+    study.signal_group(SIGCONT);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    study.signal_group(SIGSTOP);
+    ready = store_is_ready(store, view, ready_sql);
   }
+  INFO("the store reached the state to kill the study in: " << ready);
   study.signal_group(SIGKILL);
   CHECK(study.wait() == 128 + SIGKILL);
 }

@@ -114,7 +114,7 @@ TEST_CASE("[characterise] mistakes: one message naming the line, the key and wha
         }).find("gammas: Gamma = A (2 pi f)^2 / g needs gravity, and the scenario has |g| = 0") != std::string::npos);
 }
 
-TEST_CASE("a bad [characterise] study and --snapshots exit 2, a dry submit writes nothing") {
+TEST_CASE("a bad [characterise] study exits 2, a dry submit writes nothing") {
   test::TempDir dir("characterise-bad");
   const auto db = dir / "runs.sqlite";
   const auto file = dir / "c.ini";
@@ -124,10 +124,6 @@ TEST_CASE("a bad [characterise] study and --snapshots exit 2, a dry submit write
   CHECK(one.err.find("amplitudes has 1 value") != std::string::npos);
   CHECK(!std::filesystem::exists(db));
   write_file(file, characterise_study("[characterise]\namplitudes = 0.001, 0.002\nfrequencies = 10, 20\n"));
-  const Result snapshots = pdamp_cli({"study", "run", file.string(), "--snapshots", "0.01", "--db", db.string()}, dir);
-  CHECK(snapshots.code == 2);
-  CHECK(snapshots.err.find("[characterise]: --snapshots is for [sweep] and [frf] studies only") != std::string::npos);
-  CHECK(!std::filesystem::exists(db));
   check_curve_study_submit(file, db, dir);
 }
 
@@ -332,4 +328,45 @@ TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SI
   CHECK(changed.code == 2);
   CHECK(changed.err.find("[characterise] amplitudes: '0.0005, 0.0015, 0.004' now, '0.0005, 0.0015, 0.003' stored") !=
         std::string::npos);
+}
+
+TEST_CASE(
+    "snapshots of [characterise] points: frames at their cycle boundaries, the same bits as without, after a "
+    "SIGKILL too") {
+  test::TempDir dir("characterise-snapshots");
+  const auto file = dir / "c.ini";
+  // Gamma 0.6 to 19 (the bed rides the floor, or flies), 25 cycles each.
+  write_file(file, characterise_study("[characterise]\namplitudes = 0.0004, 0.003\nfrequencies = 20, 40\n"
+                                      "amplitude_tolerance = 1e-9\nmax_cycles = 20\nmeasured_cycles = 5\n"));
+  const auto plain = run_study_per_jobs(file, dir, {1}).at(1);
+  // A frame every 0.15 s / T cycles: 3 at 20 Hz, 6 at 40 Hz.
+  const std::string cycle_frames =
+      "SELECT count(*) FROM run_snapshots s JOIN study_characterisation c USING (run_id) WHERE s.frames = "
+      "c.cycles_run / CAST(round(0.15 * c.frequency_hz) AS INTEGER) + 1 AND abs(s.interval_s - 0.15) <= 1e-15";
+  const auto db = dir / "snapshots.sqlite";
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--snapshots", "0.15",
+                              "--snapshot-dir", (dir / "frames").string()},
+                             dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(characterise_metric_differences(plain, db) == 0);
+  CHECK(sample_differences(plain, db).first == 0);
+  CHECK(count_rows(db, cycle_frames) == 4);
+  for (const std::int64_t run : {1, 2, 3, 4}) check_stored_snapshots(db, run, dir);
+
+  // Killed once a point has a checkpoint, resumed: its snapshots go on in its folder.
+  const auto killed = dir / "killed.sqlite";
+  const std::vector<std::string> snapshots{"--snapshots", "0.15", "--snapshot-dir", (dir / "killed").string()};
+  std::vector<std::string> killed_run{"--checkpoint-every", "0.01"};
+  killed_run.insert(killed_run.end(), snapshots.begin(), snapshots.end());
+  kill_study_when(file, killed, dir, "study_characterisation",
+                  "SELECT (" + std::string(checkpointed_unfinished_runs) + ") > 0", killed_run);
+  resume_continuing_checkpoints(killed, dir, snapshots);
+  CHECK(characterise_metric_differences(plain, killed) == 0);
+  CHECK(count_rows(killed, cycle_frames) == 4);
+  for (const int point : {1, 2, 3, 4}) {
+    check_stored_snapshots(
+        killed, count_rows(killed, "SELECT run_id FROM study_characterisation WHERE point = " + std::to_string(point)),
+        dir);
+  }
 }

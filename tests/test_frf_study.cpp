@@ -58,22 +58,6 @@ std::int64_t orphan_end_states(const std::filesystem::path& db) {
                     "AND state_id NOT IN (SELECT state_id FROM study_point_states)");
 }
 
-/// `pdamp study resume 1 --jobs 2 [extra...]` of the killed study in `killed`: each run
-/// that had a checkpoint is completed by its point.
-void resume_continuing_checkpoints(const std::filesystem::path& killed, const TempDir& dir,
-                                   const std::vector<std::string>& extra = {}) {
-  const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
-  std::vector<std::string> args{"study", "resume", "1", "--db", killed.string(), "--jobs", "2"};
-  args.insert(args.end(), extra.begin(), extra.end());
-  const Result resumed = pdamp_cli(args, dir);
-  INFO(resumed.err);
-  REQUIRE(resumed.code == 0);
-  INFO("runs with a checkpoint before the resume: " << checkpointed);
-  CHECK(checkpointed != "()");
-  CHECK(runs_continued_by_their_points(killed, checkpointed) ==
-        count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
-}
-
 }  // namespace
 
 TEST_CASE("[frf] sections: curves by model, level and direction, each point after the one before") {
@@ -552,22 +536,6 @@ TEST_CASE("an [frf] grid runs each key value's curve on its own: continued withi
   CHECK(orphan_end_states(killed) == 0);
 }
 
-namespace {
-
-/// tools/check_snapshots.py on run `run_id`'s collection, against the store `db`.
-void check_with_vtk(const std::filesystem::path& db, std::int64_t run_id, const TempDir& dir) {
-  RunStore store(db, StoreAccess::read);
-  const auto recorded = store.snapshots(run_id);
-  REQUIRE(recorded);
-  const Result r = pdamp_cli({(source_dir() / "tools" / "check_snapshots.py").string(), recorded->collection, "--db",
-                              db.string(), "--run", std::to_string(run_id)},
-                             dir, "/usr/bin/python3");
-  INFO(r.out << r.err);
-  CHECK(r.code == 0);
-}
-
-}  // namespace
-
 TEST_CASE(
     "snapshots of [frf] points: frames at their cycle boundaries, the same bits as without, after a SIGKILL too") {
   test::TempDir dir("frf-snapshots");
@@ -586,7 +554,7 @@ TEST_CASE(
   CHECK(count_rows(db,
                    "SELECT count(*) FROM run_snapshots s JOIN study_frf f USING (run_id) WHERE s.frames = "
                    "f.cycles_run / 2 + 1 AND abs(s.interval_s - 2 / f.frequency_hz) <= 1e-15") == 2);
-  for (const std::int64_t run : {1, 2}) check_with_vtk(db, run, dir);
+  for (const std::int64_t run : {1, 2}) check_stored_snapshots(db, run, dir);
 
   // Killed once a point has a checkpoint, resumed: its snapshots go on in its folder.
   const auto killed = dir / "killed.sqlite";
@@ -602,7 +570,7 @@ TEST_CASE(
                    "f.cycles_run / 2 + 1") == 2);
   for (const std::int64_t run : {count_rows(killed, "SELECT run_id FROM study_frf WHERE point = 1"),
                                  count_rows(killed, "SELECT run_id FROM study_frf WHERE point = 2")}) {
-    check_with_vtk(killed, run, dir);
+    check_stored_snapshots(killed, run, dir);
   }
 }
 

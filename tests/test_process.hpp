@@ -131,6 +131,24 @@ inline Result pdamp_cli(const std::vector<std::string>& args, const TempDir& dir
   return {code, p.out(), p.err()};
 }
 
+/// tools/check_snapshots.py (VTK's reader) on run `run_id`'s snapshots, recorded in the
+/// store `db`, against its stored samples; fails with its report (also if python3-vtk9 is
+/// missing).
+inline void check_stored_snapshots(const std::filesystem::path& db, std::int64_t run_id, const TempDir& dir) {
+  std::string collection;
+  {
+    sqlite::Database d(db, sqlite::Access::read_only);
+    sqlite::Statement q(d, "SELECT collection FROM run_snapshots WHERE run_id = " + std::to_string(run_id));
+    REQUIRE(q.step());
+    collection = q.column_text(0);
+  }
+  const Result r = pdamp_cli({(source_dir() / "tools" / "check_snapshots.py").string(), collection, "--db", db.string(),
+                              "--run", std::to_string(run_id)},
+                             dir, "/usr/bin/python3");
+  INFO(r.out << r.err);
+  CHECK(r.code == 0);
+}
+
 /// The first column of the first row of a query on a store file.
 inline std::int64_t count_rows(const std::filesystem::path& db, const std::string& sql) {
   sqlite::Database d(db);
@@ -239,6 +257,22 @@ inline void check_curve_study_submit(const std::filesystem::path& file, const st
   CHECK(slurm.code == 0);
   CHECK(slurm.out.find("curves as a job array, one task per curve") != std::string::npos);
   CHECK(!std::filesystem::exists(db));
+}
+
+/// `pdamp study resume 1 --jobs 2 [extra...]` of the killed study in `killed`: each run
+/// that had a checkpoint is completed by its point.
+inline void resume_continuing_checkpoints(const std::filesystem::path& killed, const TempDir& dir,
+                                          const std::vector<std::string>& extra = {}) {
+  const std::string checkpointed = unfinished_checkpointed_run_ids(killed);
+  std::vector<std::string> args{"study", "resume", "1", "--db", killed.string(), "--jobs", "2"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const Result resumed = pdamp_cli(args, dir);
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  INFO("runs with a checkpoint before the resume: " << checkpointed);
+  CHECK(checkpointed != "()");
+  CHECK(runs_continued_by_their_points(killed, checkpointed) ==
+        count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
 }
 
 }  // namespace pdamp::test

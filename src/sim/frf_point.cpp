@@ -158,6 +158,10 @@ WallTouch wall_touch(const State& state, const Cavity& cavity) {
 
 }  // namespace
 
+double cycle_period_s(const Scenario& scenario) {
+  return 2.0 * std::numbers::pi / scenario.excitation.angular_frequency_rad_s();
+}
+
 RunOutcome run_frf_simulation(Engine& engine, const Scenario& scenario, RunRecorder& recorder,
                               const RunControl& control, const SteadyStateCriterion& criterion, FrfRun& result,
                               const CycleLoopState* resume) {

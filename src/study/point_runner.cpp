@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
-#include <numbers>
 #include <optional>
 #include <vector>
 
@@ -198,36 +197,18 @@ class PointExecution {
     const Scenario scenario = point_scenario(*study_, point, host);
     RunPlan plan = plan_run(frf.model, scenario);
     FrfRun frf_run;
-    // Snapshots at the cycle boundaries (cycle_frames): a new run's, or those of the run an
-    // earlier attempt left, continued from its checkpoint.
-    const double period_s = 2.0 * std::numbers::pi / FrfDrive::of(scenario).omega_rad_s;
-    std::optional<SnapshotWriter> frames;
-    const std::optional<std::int64_t> earlier = studies_.earlier_run(study_id_, point_, attempt_, to_string(frf.model));
-    const auto [body, resumed] = cycle_bodies(
-        [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s, RunRecorder& recorder,
-                                                         const RunControl& c, const CycleLoopState* resume) {
-          const auto recorded = resume && earlier ? store_->snapshots(*earlier) : std::nullopt;
-          if (recorded) {
-            frames.emplace(SnapshotFiles{recorded->folder, recorded->collection}, s,
-                           cycle_frames(recorded->interval_s, period_s), resume->outcome.samples - 1);
-          }
-          RunControl observed = c;
-          if (frames) {
-            observed.at_observation = [&frames](const Engine& e, const ObservationStep& step) {
-              frames->at_observation(e, step);
-            };
-          }
-          return run_frf_simulation(engine, s, recorder, observed, criterion, frf_run, resume);
-        });
+    CycleSnapshots snapshots = cycle_snapshots(scenario, frf.model);
+    const auto [body, resumed] = cycle_bodies([&, criterion = point_criterion(*study_, point)](
+                                                  Engine& engine, const Scenario& s, RunRecorder& recorder,
+                                                  const RunControl& c, const CycleLoopState* resume) {
+      return run_frf_simulation(engine, s, recorder, observing(snapshots, c, s, resume), criterion, frf_run, resume);
+    });
     plan.body = body;
     PointRuns result;
-    result.runs.push_back(run_cycles(scenario, frf.model, plan, resumed, from, shift, [&](std::int64_t run_id) {
-      if (!control_->snapshots) return;
-      frames.emplace(*control_->snapshots, scenario, run_id, cycle_frames(control_->snapshots->interval_s, period_s));
-      record_snapshots(run_id, *frames);
-    }));
+    result.runs.push_back(run_cycles(scenario, frf.model, plan, resumed, from, shift,
+                                     [&](std::int64_t run_id) { start_snapshots(snapshots, scenario, run_id); }));
     const StoredRun& run = result.runs.back();
-    if (frames) record_snapshots(run.run_id, *frames);
+    if (snapshots.frames) record_snapshots(run.run_id, *snapshots.frames);
     if (run.outcome.status != RunStatus::completed) return result;
     const State& end = frf_run.final_state;
     result.frf = FrfPointResult{run.run_id,
@@ -238,6 +219,44 @@ class PointExecution {
                                 {run.run_id, 0, end.observation.t_s, end.observation.host}};
     result.end_spheres = end.particles;
     return result;
+  }
+
+  /// A cycle-by-cycle point's snapshots, at its cycle boundaries (cycle_frames): a new
+  /// run's, or those of the run an earlier attempt left, continued from its checkpoint.
+  struct CycleSnapshots {
+    double period_s;
+    std::optional<std::int64_t> earlier;  ///< the run an earlier attempt left, if any
+    std::optional<SnapshotWriter> frames;
+  };
+
+  CycleSnapshots cycle_snapshots(const Scenario& scenario, Model model) {
+    return {cycle_period_s(scenario), studies_.earlier_run(study_id_, point_, attempt_, to_string(model)), {}};
+  }
+
+  /// `control`, writing the frames at the cycle boundaries: a run resumed from `resume`
+  /// continues those its earlier attempt recorded.
+  RunControl observing(CycleSnapshots& snapshots, const RunControl& control, const Scenario& scenario,
+                       const CycleLoopState* resume) {
+    const auto recorded = resume && snapshots.earlier ? store_->snapshots(*snapshots.earlier) : std::nullopt;
+    if (recorded) {
+      snapshots.frames.emplace(SnapshotFiles{recorded->folder, recorded->collection}, scenario,
+                               cycle_frames(recorded->interval_s, snapshots.period_s), resume->outcome.samples - 1);
+    }
+    RunControl observed = control;
+    if (snapshots.frames) {
+      observed.at_observation = [&frames = snapshots.frames](const Engine& e, const ObservationStep& step) {
+        frames->at_observation(e, step);
+      };
+    }
+    return observed;
+  }
+
+  /// The frames of the new run `run_id`, if asked for, recorded in the store as it starts.
+  void start_snapshots(CycleSnapshots& snapshots, const Scenario& scenario, std::int64_t run_id) {
+    if (!control_->snapshots) return;
+    snapshots.frames.emplace(*control_->snapshots, scenario, run_id,
+                             cycle_frames(control_->snapshots->interval_s, snapshots.period_s));
+    record_snapshots(run_id, *snapshots.frames);
   }
 
   /// Where run `run_id`'s snapshots are, their interval and how many frames there are.
@@ -271,15 +290,19 @@ class PointExecution {
     const Scenario scenario = point_scenario(*study_, point);
     RunPlan plan = plan_run(c.model, scenario);
     CharacterisationRun characterisation;
+    CycleSnapshots snapshots = cycle_snapshots(scenario, c.model);
     const auto [body, resumed] = cycle_bodies(
         [&, criterion = point_criterion(*study_, point)](Engine& engine, const Scenario& s, RunRecorder& recorder,
                                                          const RunControl& rc, const CycleLoopState* resume) {
-          return run_characterisation_simulation(engine, s, recorder, rc, criterion, characterisation, resume);
+          return run_characterisation_simulation(engine, s, recorder, observing(snapshots, rc, s, resume), criterion,
+                                                 characterisation, resume);
         });
     plan.body = body;
     PointRuns result;
-    result.runs.push_back(run_cycles(scenario, c.model, plan, resumed, from));
+    result.runs.push_back(run_cycles(scenario, c.model, plan, resumed, from, {},
+                                     [&](std::int64_t run_id) { start_snapshots(snapshots, scenario, run_id); }));
     const StoredRun& run = result.runs.back();
+    if (snapshots.frames) record_snapshots(run.run_id, *snapshots.frames);
     if (run.outcome.status != RunStatus::completed) return result;
     std::optional<InitialBed> settled;
     const double free_height_m = free_height(scenario, settled_bed(scenario, settled).particles);

@@ -11,6 +11,7 @@
 #include "pdamp/input_file.hpp"
 #include "pdamp/model/scenario_loader.hpp"
 #include "pdamp/scenario/ini.hpp"
+#include "pdamp/sim/frf_point.hpp"
 #include "pdamp/sim/stored_run.hpp"
 
 namespace pdamp::study {
@@ -418,28 +419,18 @@ std::string describe_values(const StudyPoint& point) { return describe(point.val
 std::string describe_grid(const FrfPoint& curve) { return describe(curve.grid); }
 
 void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots) {
-  if (snapshots && !study.file.characterisations.empty()) {
-    throw InputError(study.source.study_path.string() + ": [" + study.points.front().section +
-                     "]: --snapshots is for [sweep] and [frf] studies only: a characterisation point's container "
-                     "follows its prescribed motion, its bed's frames are not taken; run the study without "
-                     "--snapshots (or one point's scenario with 'pdamp run --snapshots')");
-  }
   const std::vector<Model> models = models_of(study.file.models);
   for (const auto& point : study.points) {
     try {
       const Scenario scenario = point_scenario(study, point);
-      if (point.frf) {
+      if (point.frf || point.characterise) {
         const SteadyStateCriterion& c = point_criterion(study, point);
-        if (snapshots) {
-          check_cycle_snapshot_settings(*snapshots, 2.0 * std::numbers::pi / FrfDrive::of(scenario).omega_rad_s,
-                                        c.max_cycles + c.measured_cycles);
-        }
-        plan_run(point.frf->model, scenario);
+        if (snapshots)
+          check_cycle_snapshot_settings(*snapshots, cycle_period_s(scenario), c.max_cycles + c.measured_cycles);
+        plan_run(point.frf ? point.frf->model : point.characterise->model, scenario);
         continue;
       }
-      const std::vector<Model> point_models =
-          point.characterise ? std::vector<Model>{point.characterise->model} : models;
-      for (const Model model : point_models) plan_run(model, scenario, snapshots);
+      for (const Model model : models) plan_run(model, scenario, snapshots);
     } catch (const InputError& e) {
       throw InputError(study.source.study_path.string() + ": point " + std::to_string(point.point) + " of " +
                        std::to_string(study.points.size()) + " ([" + point.section + "] " + describe_values(point) +

@@ -103,6 +103,10 @@ struct CharacterisationPointOutcome {
   double wall_time_s = 0.0;
 };
 
+/// The period of a cycle-by-cycle point's drive (force, base or prescribed motion), 2π/ω:
+/// the time between its cycle boundaries.
+double cycle_period_s(const Scenario& scenario);
+
 /// A characterisation point (excitation.mode = prescribed): run_to_steady_state on the
 /// particles' force, each cycle advanced in contact_instants_per_cycle steps to find the
 /// spheres touching the floor and the lid, and its metrics. Throws InputError for another

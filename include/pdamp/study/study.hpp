@@ -111,9 +111,9 @@ const SteadyStateCriterion& point_criterion(const Study& study, const StudyPoint
 
 /// Builds every point's scenario and checks that each of the study's models can run it,
 /// as `pdamp run` does before it stores anything (plan_run: the run's budget, the hard
-/// model's calibration, the snapshots if asked for). Throws InputError for the first point that fails, naming the
-/// point, its values, the key and what is valid, and for snapshots asked of a [characterise] study
-/// (an [frf] point's are checked as check_cycle_snapshot_settings says).
+/// model's calibration, the snapshots if asked for; an [frf] or [characterise] point's as
+/// check_cycle_snapshot_settings says). Throws InputError for the first point that fails,
+/// naming the point, its values, the key and what is valid.
 void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots = {});
 
 /// What differs between a stored study and the same study read now, one line per

@@ -30,8 +30,8 @@ struct ObservationGrid {
   /// The time of observation step `index` (s), as the run loop advances the engine to it:
   /// the engines stop exactly there.
   double time_s(std::int64_t index) const {
-    return static_cast<double>(index / steps_per_sample) * sample_interval_s +
-           static_cast<double>(index % steps_per_sample) * step_s;
+    const std::int64_t sample = index / steps_per_sample, step = index % steps_per_sample;
+    return static_cast<double>(sample) * sample_interval_s + static_cast<double>(step) * step_s;
   }
 };
 ObservationGrid observation_grid(const Scenario& scenario);

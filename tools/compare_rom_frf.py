@@ -6,8 +6,8 @@ per level the resonance frequency and the peak amplitude of both with their erro
 
 The full simulation's peak is the vertex of the parabola through its highest point and its
 two neighbours (the grid's step would otherwise bound the frequency's resolution); the ROM's
-is the highest solution a stepped sine up holds (the [frf] curves are up sweeps), on a grid
-ten times finer.
+is the highest solution a stepped sine holds in the curve's direction (up or down, the
+ROM's sweep_up or sweep_down branch), on a grid ten times finer.
 
 usage: tools/compare_rom_frf.py --frf-db FRF.sqlite --frf-study ID (--char-db CHAR.sqlite --char-study ID | --table FILE)
                                 [--pdamp build/ci/src/pdamp] [--out FILE.png] [--model hard]
@@ -42,13 +42,14 @@ def host_of(db, study):
 
 
 def frf_curves(db, study, model):
-    """{level: [(f, X/(F0/K), settled)]} of the up curves with particles, completed points only."""
+    """{(level, direction): [(f, X/(F0/K), settled)]} of the curves with particles, completed
+    points only, by frequency."""
     curves = {}
-    for level, f, x, settled in db.execute(
-            "SELECT level, frequency_hz, normalised_amplitude, settled FROM study_frf WHERE study_id = ? AND "
-            "status = 'completed' AND NOT host_alone AND direction = 'up' AND mode = 'force' AND model = ? "
-            "ORDER BY level, frequency_hz", (study, model)):
-        curves.setdefault(level, []).append((f, x, settled))
+    for level, direction, f, x, settled in db.execute(
+            "SELECT level, direction, frequency_hz, normalised_amplitude, settled FROM study_frf WHERE study_id = ? "
+            "AND status = 'completed' AND NOT host_alone AND mode = 'force' AND model = ? "
+            "ORDER BY level, direction DESC, frequency_hz", (study, model)):
+        curves.setdefault((level, direction), []).append((f, x, settled))
     return curves
 
 
@@ -102,30 +103,35 @@ def main():
     host = host_of(db, args.frf_study)
     curves = frf_curves(db, args.frf_study, args.model)
     if not curves:
-        fail(PROGRAM, f"study {args.frf_study} has no completed up curve of the {args.model} model under a force", 1)
+        fail(PROGRAM, f"study {args.frf_study} has no completed curve of the {args.model} model under a force", 1)
 
     fig, ax = plt.subplots(figsize=(9, 6))
-    print("level_N  f_res_full_Hz  f_res_rom_Hz  f_error  peak_full  peak_rom  peak_error  full_unsettled")
-    for i, (level, points) in enumerate(sorted(curves.items())):
+    print("level_N  sweep  f_res_full_Hz  f_res_rom_Hz  f_error  peak_full  peak_rom  peak_error  full_unsettled")
+    levels = sorted({level for level, _ in curves})
+    for (level, direction), points in sorted(curves.items(), key=lambda c: (c[0][0], c[0][1] != "up")):
         f_start, f_stop = points[0][0], points[-1][0]
         rows = rom_curve(args, host, level, f_start, f_stop, 10 * (len(points) - 1) + 1)
-        up = [(float(r["frequency_hz"]), float(r["response_ratio"])) for r in rows if r["sweep_up"] == "1"]
+        branch = [(float(r["frequency_hz"]), float(r["response_ratio"])) for r in rows
+                  if r[f"sweep_{direction}"] == "1"]
         solutions = [(float(r["frequency_hz"]), float(r["response_ratio"]), r["stability"]) for r in rows
                      if r["response_ratio"]]
         flagged = sorted({flag for r in rows for flag in r["flags"].split(";") if flag})
         f_full, x_full = parabola_peak(points)
-        f_rom, x_rom = max(up, key=lambda p: p[1])
+        f_rom, x_rom = max(branch, key=lambda p: p[1])
         unsettled = sum(1 for p in points if not p[2])
-        print(f"{level:<8g} {f_full:<14.3f} {f_rom:<13.3f} {(f_rom - f_full) / f_full:<+8.2%} {x_full:<10.3f} "
-              f"{x_rom:<9.3f} {(x_rom - x_full) / x_full:<+11.1%} {unsettled}"
+        print(f"{level:<8g} {direction:<6} {f_full:<14.3f} {f_rom:<13.3f} {(f_rom - f_full) / f_full:<+8.2%} "
+              f"{x_full:<10.3f} {x_rom:<9.3f} {(x_rom - x_full) / x_full:<+11.1%} {unsettled}"
               + (f"  (ROM flags: {', '.join(flagged)})" if flagged else ""))
-        colour = f"C{i}"
-        ax.plot([p[0] for p in points], [p[1] for p in points], linestyle="none", marker="o", color=colour,
-                label=f"full simulation, {level:g} N")
+        colour = f"C{levels.index(level)}"
+        line = "-" if direction == "up" else ":"
+        ax.plot([p[0] for p in points], [p[1] for p in points], linestyle="none",
+                marker="o" if direction == "up" else "v", color=colour,
+                label=f"full simulation, {level:g} N, {direction}")
         unsettled_points = [p for p in points if not p[2]]
         ax.plot([p[0] for p in unsettled_points], [p[1] for p in unsettled_points], linestyle="none", marker="o",
                 markersize=10, markerfacecolor="none", markeredgecolor="red")
-        ax.plot([p[0] for p in up], [p[1] for p in up], color=colour, label=f"ROM, {level:g} N (sweep up)")
+        ax.plot([p[0] for p in branch], [p[1] for p in branch], color=colour, linestyle=line,
+                label=f"ROM, {level:g} N (sweep {direction})")
         unstable = [s for s in solutions if s[2] != "stable"]
         ax.plot([s[0] for s in unstable], [s[1] for s in unstable], linestyle="none", marker=".", color=colour,
                 alpha=0.5)

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <initializer_list>
 #include <map>
 #include <sstream>
@@ -189,28 +190,35 @@ inline bool store_is_ready(const std::filesystem::path& store, const std::string
   }
 }
 
+/// Runs `p` and its children (started with Group::own) in slices of 5 ms, stopped (SIGSTOP)
+/// while `ready` is asked, until it answers true (they are left stopped), `p` ends or 60 s
+/// pass; whether it answered true. So a state that lasts a few milliseconds of the
+/// process's own time is seen however busy the machine, and it is still the state when the
+/// caller acts: polling a running process missed such states. Wall time passes while it is
+/// stopped, so its wall-time checkpoints come more often. A store read that meets a writer
+/// stopped inside an update of the WAL index waits in SQLite (up to about 10 s) and fails:
+/// `ready` should answer false then, and the process runs another slice.
+inline bool stop_when(const Process& p, const std::function<bool()>& ready) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!p.has_exited() && std::chrono::steady_clock::now() < give_up) {
+    p.signal_group(SIGCONT);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    p.signal_group(SIGSTOP);
+    if (ready()) return true;
+  }
+  return false;
+}
+
 /// `pdamp study run FILE --jobs 2 [extra...]` into `store`, killed with its workers by
-/// SIGKILL once the store has the view `view` and the count `ready_sql` is not 0 (or after
-/// 60 s). The study runs in slices of a few milliseconds and is stopped (SIGSTOP) while the
-/// store is read, so that a state lasting one cycle of the study's own time is seen however
-/// busy the machine: polling a running study missed a point's last checkpoint before its
-/// completion. Wall time passes while it is stopped, so its wall-time checkpoints come at
-/// nearly every cycle boundary. A read that meets a writer stopped inside an update of the
-/// WAL index waits in SQLite (up to about 10 s) and fails; the study then runs another slice.
+/// SIGKILL once the store has the view `view` and the count `ready_sql` is not 0 (stop_when;
+/// a point's last checkpoint before its completion is such a state).
 inline void kill_study_when(const std::filesystem::path& file, const std::filesystem::path& store, const TempDir& dir,
                             const std::string& view, const std::string& ready_sql,
                             const std::vector<std::string>& extra = {}) {
   std::vector<std::string> args{"study", "run", file.string(), "--db", store.string(), "--jobs", "2"};
   args.insert(args.end(), extra.begin(), extra.end());
   Process study(args, dir, "study", Group::own);
-  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  bool ready = false;
-  while (!ready && !study.has_exited() && std::chrono::steady_clock::now() < give_up) {
-    study.signal_group(SIGCONT);
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    study.signal_group(SIGSTOP);
-    ready = store_is_ready(store, view, ready_sql);
-  }
+  const bool ready = stop_when(study, [&] { return store_is_ready(store, view, ready_sql); });
   INFO("the store reached the state to kill the study in: " << ready);
   study.signal_group(SIGKILL);
   CHECK(study.wait() == 128 + SIGKILL);

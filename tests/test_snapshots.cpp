@@ -382,18 +382,29 @@ TEST_CASE("pdamp resume continues a killed run's snapshots: the same files, byte
                                       every};
     };
     REQUIRE(test::pdamp_cli(run_args("60"), dir).code == 0);  // run 1, uninterrupted
-    // Run 2 killed some 0.1 s after its first checkpoint, 0.3 s of wall time in: it has
-    // written frames after the checkpoint, which the resumed run writes again.
-    test::Process killed(run_args("0.3"), dir);
-    RunStore store(db, StoreAccess::read);
-    for (int i = 0; i < 6000 && !store.checkpoint(2); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    killed.signal(SIGKILL);
+    // Run 2 (checkpoints every 0.3 s of wall time) killed once it has written a frame after
+    // its latest checkpoint, which the resumed run writes again.
+    const auto frames_written = [&] {  // each frame a file of spheres and one of the cavity, and the .pvd
+      return std::distance(std::filesystem::directory_iterator(frames / "run-2"),
+                           std::filesystem::directory_iterator()) /
+             2;
+    };
+    test::Process killed(run_args("0.3"), dir, "pdamp", test::Group::own);
+    const bool frame_after_checkpoint = test::stop_when(killed, [&] {
+      try {
+        const auto checkpoint = RunStore(db, StoreAccess::read).checkpoint(2);
+        return checkpoint && static_cast<double>(frames_written() - 1) * 0.01 > checkpoint->checkpoint.t_s;
+      } catch (const std::exception&) {  // no folder or store yet, or the store's WAL index in an update
+        return false;
+      }
+    });
+    CHECK(frame_after_checkpoint);
+    killed.signal_group(SIGKILL);
     killed.wait();
+    RunStore store(db, StoreAccess::read);
     REQUIRE(store.summary(2)->status == "dead");
     const double checkpoint_s = store.checkpoint(2)->checkpoint.t_s;
-    const std::int64_t frames_before_kill =
-        std::distance(std::filesystem::directory_iterator(frames / "run-2"), std::filesystem::directory_iterator()) / 2;
+    const std::int64_t frames_before_kill = frames_written();
     INFO("killed at its checkpoint at " << checkpoint_s << " s with " << frames_before_kill << " frames written");
     CHECK(static_cast<double>(frames_before_kill - 1) * 0.01 > checkpoint_s);
 

@@ -344,11 +344,7 @@ TEST_CASE(
       "SELECT count(*) FROM run_snapshots s JOIN study_characterisation c USING (run_id) WHERE s.frames = "
       "c.cycles_run / CAST(round(0.15 * c.frequency_hz) AS INTEGER) + 1 AND abs(s.interval_s - 0.15) <= 1e-15";
   const auto db = dir / "snapshots.sqlite";
-  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--snapshots", "0.15",
-                              "--snapshot-dir", (dir / "frames").string()},
-                             dir);
-  INFO(r.err);
-  REQUIRE(r.code == 0);
+  run_study_with_snapshots(file, db, "0.15", dir);
   CHECK(characterise_metric_differences(plain, db) == 0);
   CHECK(sample_differences(plain, db).first == 0);
   CHECK(count_rows(db, cycle_frames) == 4);
@@ -356,12 +352,7 @@ TEST_CASE(
 
   // Killed once a point has a checkpoint, resumed: its snapshots go on in its folder.
   const auto killed = dir / "killed.sqlite";
-  const std::vector<std::string> snapshots{"--snapshots", "0.15", "--snapshot-dir", (dir / "killed").string()};
-  std::vector<std::string> killed_run{"--checkpoint-every", "0.01"};
-  killed_run.insert(killed_run.end(), snapshots.begin(), snapshots.end());
-  kill_study_when(file, killed, dir, "study_characterisation",
-                  "SELECT (" + std::string(checkpointed_unfinished_runs) + ") > 0", killed_run);
-  resume_continuing_checkpoints(killed, dir, snapshots);
+  kill_and_resume_with_snapshots(file, killed, "study_characterisation", "0.15", dir);
   CHECK(characterise_metric_differences(plain, killed) == 0);
   CHECK(count_rows(killed, cycle_frames) == 4);
   for (const int point : {1, 2, 3, 4}) {

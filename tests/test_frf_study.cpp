@@ -544,11 +544,7 @@ TEST_CASE(
   const auto plain = run_study_per_jobs(file, dir, {1}).at(1);
   // Every other cycle at 16 Hz (0.1 s / 0.0625 s rounds to 2) and at 18 Hz (1.8 rounds to 2).
   const auto db = dir / "snapshots.sqlite";
-  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--snapshots", "0.1",
-                              "--snapshot-dir", (dir / "frames").string()},
-                             dir);
-  INFO(r.err);
-  REQUIRE(r.code == 0);
+  run_study_with_snapshots(file, db, "0.1", dir);
   CHECK(frf_metric_differences(plain, db) == 0);
   CHECK(sample_differences(plain, db).first == 0);
   CHECK(count_rows(db,
@@ -558,12 +554,7 @@ TEST_CASE(
 
   // Killed once a point has a checkpoint, resumed: its snapshots go on in its folder.
   const auto killed = dir / "killed.sqlite";
-  const std::vector<std::string> snapshots{"--snapshots", "0.1", "--snapshot-dir", (dir / "killed").string()};
-  std::vector<std::string> killed_run{"--checkpoint-every", "0.01"};
-  killed_run.insert(killed_run.end(), snapshots.begin(), snapshots.end());
-  kill_study_when(file, killed, dir, "study_frf", "SELECT (" + std::string(checkpointed_unfinished_runs) + ") > 0",
-                  killed_run);
-  resume_continuing_checkpoints(killed, dir, snapshots);
+  kill_and_resume_with_snapshots(file, killed, "study_frf", "0.1", dir);
   CHECK(frf_metric_differences(plain, killed) == 0);
   CHECK(count_rows(killed,
                    "SELECT count(*) FROM run_snapshots s JOIN study_frf f USING (run_id) WHERE s.frames = "

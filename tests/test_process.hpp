@@ -283,4 +283,29 @@ inline void resume_continuing_checkpoints(const std::filesystem::path& killed, c
         count_rows(killed, "SELECT count(*) FROM runs WHERE run_id IN " + checkpointed));
 }
 
+/// `pdamp study run FILE --snapshots EVERY_S --snapshot-dir DIR/frames` into `db`; the
+/// test stops there, with pdamp's stderr, if it fails.
+inline void run_study_with_snapshots(const std::filesystem::path& file, const std::filesystem::path& db,
+                                     const std::string& every_s, const TempDir& dir) {
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string(), "--snapshots", every_s,
+                              "--snapshot-dir", (dir / "frames").string()},
+                             dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+}
+
+/// The study FILE run into `killed` with `--snapshots EVERY_S --snapshot-dir DIR/killed` and
+/// checkpoints every 0.01 s, killed once a run of it has a checkpoint (kill_study_when; the
+/// study has the view `view`) and resumed with the same snapshots: each run that had a
+/// checkpoint is completed by its point (resume_continuing_checkpoints).
+inline void kill_and_resume_with_snapshots(const std::filesystem::path& file, const std::filesystem::path& killed,
+                                           const std::string& view, const std::string& every_s, const TempDir& dir) {
+  const std::vector<std::string> snapshots{"--snapshots", every_s, "--snapshot-dir", (dir / "killed").string()};
+  std::vector<std::string> killed_run{"--checkpoint-every", "0.01"};
+  killed_run.insert(killed_run.end(), snapshots.begin(), snapshots.end());
+  kill_study_when(file, killed, dir, view, "SELECT (" + std::string(checkpointed_unfinished_runs) + ") > 0",
+                  killed_run);
+  resume_continuing_checkpoints(killed, dir, snapshots);
+}
+
 }  // namespace pdamp::test

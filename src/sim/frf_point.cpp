@@ -180,14 +180,13 @@ CharacterisationPointOutcome run_characterisation_point(Engine& engine, const Sc
   if (e.mode != ExcitationMode::prescribed_motion) {
     throw InputError("a characterisation point needs excitation.mode = prescribed");
   }
-  const double omega_rad_s = e.angular_frequency_rad_s();
+  const double omega_rad_s = e.angular_frequency_rad_s(), period_s = cycle_period_s(scenario);
   const Cavity cavity(scenario.cavity);
   // Each cycle's instants touching the floor and the lid; the measured cycles are the last.
   CycleLog own;
   CycleLog& cycles = log ? *log : own;
   std::vector<WallTouches>& touches = cycles.touches;
   CycleHooks hooks{at_boundary, [&](Engine& engine_, double t_end_s) {
-                     const double period_s = 2.0 * std::numbers::pi / omega_rad_s;
                      const double t_start_s = t_end_s - period_s;
                      WallTouches count;
                      for (int k = 1; k <= contact_instants_per_cycle; ++k) {

@@ -164,12 +164,21 @@ class PointExecution {
     }
   }
 
-  /// A point run cycle by cycle (`plan.body` set; `resumed`, the same from a checkpoint),
-  /// from the previous point's final state `from` (moved by `shift`) or from the settled
-  /// bed, into the store linked to the point; or the run an earlier attempt left, resumed.
+  /// A cycle-by-cycle point's snapshots, at its cycle boundaries (cycle_frames): a new
+  /// run's, or those of the run an earlier attempt left, continued from its checkpoint.
+  struct CycleSnapshots {
+    double period_s;
+    std::optional<std::int64_t> earlier;  ///< the run an earlier attempt left, if any
+    std::optional<SnapshotWriter> frames;
+  };
+
+  /// A point run cycle by cycle (`plan.body` set, observing with `snapshots`; `resumed`,
+  /// the same from a checkpoint), from the previous point's final state `from` (moved by
+  /// `shift`) or from the settled bed, into the store linked to the point; or the run an
+  /// earlier attempt left, resumed. Its snapshots, if any, are recorded with it.
   StoredRun run_cycles(const Scenario& scenario, Model model, const RunPlan& plan, const ResumedBody& resumed,
-                       const std::optional<FrfEndState>& from, const std::optional<HostState>& shift = {},
-                       const std::function<void(std::int64_t run_id)>& created = {}) {
+                       CycleSnapshots& snapshots, const std::optional<FrfEndState>& from,
+                       const std::optional<HostState>& shift = {}) {
     std::optional<InitialBed> bed;
     const BedSource bed_source = [&]() -> const InitialBed& {
       if (!bed && from) bed = continued_bed(*from, shift);
@@ -178,11 +187,15 @@ class PointExecution {
     const std::string_view name = to_string(model);
     const RunControl run_control =
         run_control_for([&, duration = scenario.run.duration_s](double t) { report(t / duration, name); });
-    if (auto run = continue_earlier_run(name, run_control, resumed, false)) return *run;
-    return run_and_store(*store_, plan, bed_source, run_control, control_->warn, [&](std::int64_t run_id) {
-      studies_.link_run(study_id_, point_, attempt_, name, run_id);
-      if (created) created(run_id);
-    });
+    std::optional<StoredRun> run = continue_earlier_run(name, run_control, resumed, false);
+    if (!run) {
+      run = run_and_store(*store_, plan, bed_source, run_control, control_->warn, [&](std::int64_t run_id) {
+        studies_.link_run(study_id_, point_, attempt_, name, run_id);
+        start_snapshots(snapshots, scenario, run_id);
+      });
+    }
+    if (snapshots.frames) record_snapshots(run->run_id, *snapshots.frames);
+    return *run;
   }
 
   /// A frequency-response point: from the previous point's final state (continuation) or
@@ -205,10 +218,8 @@ class PointExecution {
     });
     plan.body = body;
     PointRuns result;
-    result.runs.push_back(run_cycles(scenario, frf.model, plan, resumed, from, shift,
-                                     [&](std::int64_t run_id) { start_snapshots(snapshots, scenario, run_id); }));
+    result.runs.push_back(run_cycles(scenario, frf.model, plan, resumed, snapshots, from, shift));
     const StoredRun& run = result.runs.back();
-    if (snapshots.frames) record_snapshots(run.run_id, *snapshots.frames);
     if (run.outcome.status != RunStatus::completed) return result;
     const State& end = frf_run.final_state;
     result.frf = FrfPointResult{run.run_id,
@@ -220,14 +231,6 @@ class PointExecution {
     result.end_spheres = end.particles;
     return result;
   }
-
-  /// A cycle-by-cycle point's snapshots, at its cycle boundaries (cycle_frames): a new
-  /// run's, or those of the run an earlier attempt left, continued from its checkpoint.
-  struct CycleSnapshots {
-    double period_s;
-    std::optional<std::int64_t> earlier;  ///< the run an earlier attempt left, if any
-    std::optional<SnapshotWriter> frames;
-  };
 
   CycleSnapshots cycle_snapshots(const Scenario& scenario, Model model) {
     return {cycle_period_s(scenario), studies_.earlier_run(study_id_, point_, attempt_, to_string(model)), {}};
@@ -299,10 +302,8 @@ class PointExecution {
         });
     plan.body = body;
     PointRuns result;
-    result.runs.push_back(run_cycles(scenario, c.model, plan, resumed, from, {},
-                                     [&](std::int64_t run_id) { start_snapshots(snapshots, scenario, run_id); }));
+    result.runs.push_back(run_cycles(scenario, c.model, plan, resumed, snapshots, from));
     const StoredRun& run = result.runs.back();
-    if (snapshots.frames) record_snapshots(run.run_id, *snapshots.frames);
     if (run.outcome.status != RunStatus::completed) return result;
     std::optional<InitialBed> settled;
     const double free_height_m = free_height(scenario, settled_bed(scenario, settled).particles);

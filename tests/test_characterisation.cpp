@@ -10,6 +10,7 @@
 #include <sstream>
 #include <thread>
 
+#include "pdamp/rom/table_files.hpp"
 #include "pdamp/store/study_store.hpp"
 #include "pdamp/study/study.hpp"
 #include "study_compare.hpp"
@@ -256,19 +257,31 @@ TEST_CASE("a shaken bed: the ledger's loss per cycle is the first harmonic's, th
     CHECK(m.floor_contact_fraction < 1.0);
     CHECK(m.impact_J_per_cycle > 0.0);
   }
-  // No damper table from a Gamma grid (its amplitudes differ by frequency) nor from another study kind.
+  // The damper table of a Γ grid has rows of Γ, each node the stored point's values.
   const Result gammas =
       pdamp_cli({"rom", "--study", "1", "--db", db.string(), "--export-table", (dir / "t.csv").string()}, dir);
-  CHECK(gammas.code == 2);
-  CHECK(gammas.err.find("gives gammas, so its amplitudes differ from frequency to frequency") != std::string::npos);
+  INFO(gammas.err);
+  REQUIRE(gammas.code == 0);
+  const rom::DamperTable table = rom::read_damper_table(dir / "t.csv");
+  CHECK(table.row_axis == rom::RowAxis::gamma);
+  CHECK(table.rows == std::vector<double>{2, 4});
+  CHECK(table.frequencies_hz == std::vector<double>{15, 25});
+  for (const auto& p : StudyStore(store).characterise_points(1)) {
+    const std::size_t i = p.place.gamma_given == 2.0 ? 0 : 1, j = p.place.frequency_hz == 15.0 ? 0 : 1;
+    CHECK(table.amplitude_m(i, j) == p.place.amplitude_m);
+    CHECK(table.at(i, j).m_app_kg == p.result->metrics.apparent_mass_kg);
+    CHECK(table.at(i, j).c_eq_N_s_m == p.result->metrics.equivalent_damping_N_s_m);
+    CHECK(table.at(i, j).settled == p.result->metrics.settled);
+  }
+  // No damper table from another study kind.
   write_file(dir / "s.ini",
              "[study]\nscenario = " + small() + "\nmodels = hard\n[sweep]\nrun.duration_s = 0.01, 0.02\n");
   REQUIRE(pdamp_cli({"study", "run", (dir / "s.ini").string(), "--db", db.string()}, dir).code == 0);
   const Result sweep =
-      pdamp_cli({"rom", "--study", "2", "--db", db.string(), "--export-table", (dir / "t.csv").string()}, dir);
+      pdamp_cli({"rom", "--study", "2", "--db", db.string(), "--export-table", (dir / "s.csv").string()}, dir);
   CHECK(sweep.code == 2);
   CHECK(sweep.err.find("is not a characterisation") != std::string::npos);
-  CHECK(!std::filesystem::exists(dir / "t.csv"));
+  CHECK(!std::filesystem::exists(dir / "s.csv"));
 }
 
 TEST_CASE("a [characterise] study gives the same bits for any --jobs, after a SIGKILL and resuming") {

@@ -7,6 +7,7 @@
 #include <complex>
 #include <functional>
 #include <numbers>
+#include <sstream>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/rom/prediction_files.hpp"
@@ -28,11 +29,19 @@ DamperTable table_of(const std::vector<double>& amplitudes_m, const std::vector<
   t.source = "test";
   t.bed_mass_kg = 0.01;
   t.gravity_m_s2 = gravity_m_s2;
-  t.amplitudes_m = amplitudes_m;
+  t.rows = amplitudes_m;
   t.frequencies_hz = frequencies_hz;
   for (const double f : frequencies_hz) {
     for (const double a : amplitudes_m) t.points.push_back(point(a, f));
   }
+  return t;
+}
+
+/// A table of Γ rows whose every point is `point(Γ, f)`.
+DamperTable gamma_table_of(const std::vector<double>& gammas, const std::vector<double>& frequencies_hz,
+                           const std::function<TablePoint(double, double)>& point) {
+  DamperTable t = table_of(gammas, frequencies_hz, point);
+  t.row_axis = RowAxis::gamma;
   return t;
 }
 
@@ -200,6 +209,45 @@ TEST_CASE("rom: between frequency columns the table is interpolated at constant 
   const auto v = TableInterpolator(w).at(4e-4, 7.5);
   REQUIRE(v);
   CHECK(v->m_app_kg == doctest::Approx(0.5 * (0.4 + 5) + 0.5 * (0.4 + 10)).epsilon(1e-13));
+}
+
+TEST_CASE("rom: a table of Gamma rows is read at the query's Gamma: exact on its nodes, linear in ln Gamma and f") {
+  const std::vector<double> gammas{0.5, 1.0, 2.5, 6.0, 15.0}, frequencies{15, 19.5, 24, 30};
+  // Linear in ln Γ and in f: the interpolation reproduces it everywhere inside.
+  const auto m = [](double gamma, double f) { return 0.004 * (1 - 0.1 * std::log(gamma)) + 1e-5 * f; };
+  const DamperTable t = gamma_table_of(gammas, frequencies, [&](double gamma, double f) {
+    return TablePoint{m(gamma, f), 0.01 * gamma * f, gamma / f, f, true};
+  });
+  const TableInterpolator table(t);
+  const auto amplitude = [&](double gamma, double f) { return gamma * t.gravity_m_s2 / std::pow(2 * pi * f, 2); };
+  for (std::size_t j = 0; j < frequencies.size(); ++j) {
+    for (std::size_t i = 0; i < gammas.size(); ++i) {
+      CHECK(t.gamma(i, j) == gammas[i]);
+      CHECK(t.amplitude_m(i, j) == doctest::Approx(amplitude(gammas[i], frequencies[j])).epsilon(1e-15));
+      const auto v = table.at(t.amplitude_m(i, j), frequencies[j]);
+      REQUIRE(v);
+      CHECK(*v == static_cast<const DamperValues&>(t.at(i, j)));
+    }
+  }
+  for (const double f : {15.0, 17.0, 21.3, 27.0, 30.0}) {
+    CAPTURE(f);
+    for (const double gamma : {0.5, 0.7, 1.9, 9.0, 15.0}) {
+      const auto v = table.at(amplitude(gamma, f), f);
+      REQUIRE(v);
+      CHECK(v->m_app_kg == doctest::Approx(m(gamma, f)).epsilon(1e-12));
+    }
+    // Every frequency covers the whole Γ range (amplitude rows cover a little less between columns).
+    const AmplitudeProfile p = table.profile(f);
+    CHECK(p.lowest_amplitude_m() == doctest::Approx(amplitude(0.5, f)).epsilon(1e-12));
+    CHECK(p.highest_amplitude_m() == doctest::Approx(amplitude(15.0, f)).epsilon(1e-12));
+    CHECK(!table.at(amplitude(0.499, f), f));
+    CHECK(!table.at(amplitude(15.01, f), f));
+  }
+  // Γ needs gravity.
+  DamperTable weightless = t;
+  weightless.gravity_m_s2 = 0;
+  CHECK_THROWS_WITH_AS(validate_damper_table(weightless, "w"),
+                       doctest::Contains("the rows are gammas but gravity_m_s2 = 0"), InputError);
 }
 
 TEST_CASE("rom: a frequency's amplitude profile is the interpolation itself, and never leaves the nodes' range") {
@@ -419,7 +467,7 @@ TEST_CASE("rom: a solution that leans on an unsettled table point is flagged") {
   const TableInterpolator clean(t);
   const double a =
       predict_response(clean, table1_host, {ExcitationKind::force, 0.05}, {11.0}).points[0].solutions[0].amplitude_m;
-  const auto& amplitudes = t.amplitudes_m;
+  const auto& amplitudes = t.rows;
   const std::size_t i =
       static_cast<std::size_t>(std::upper_bound(amplitudes.begin(), amplitudes.end(), a) - amplitudes.begin());
   t.at(i, 2).settled = false;  // column 2 is 11 Hz
@@ -449,14 +497,28 @@ TEST_CASE("rom: the table's CSV and JSON read back to the same bits") {
       "settled , c_eq_spread_N_s_m, m_app_spread_kg, c_eq_N_s_m, m_app_kg, frequency_hz, amplitude_m\r\n";
   for (std::size_t k = t.points.size(); k-- > 0;) {
     const TablePoint& p = t.points[k];
-    const std::size_t i = k % t.amplitudes_m.size(), j = k / t.amplitudes_m.size();
+    const std::size_t i = k % t.rows.size(), j = k / t.rows.size();
     char line[512];
     std::snprintf(line, sizeof line, "%d, %.17g, %.17g, %.17g, %.17g, %.17g, %.17g\r\n", p.settled ? 1 : 0,
-                  p.c_eq_spread_N_s_m, p.m_app_spread_kg, p.c_eq_N_s_m, p.m_app_kg, t.frequencies_hz[j],
-                  t.amplitudes_m[i]);
+                  p.c_eq_spread_N_s_m, p.m_app_spread_kg, p.c_eq_N_s_m, p.m_app_kg, t.frequencies_hz[j], t.rows[i]);
     shuffled += line;
   }
   CHECK(parse_damper_table_csv(shuffled, "shuffled") == t);
+  // A table of Γ rows: '# rows = gamma' and the gammas member; amplitude_m derived, may be left out.
+  const DamperTable g = gamma_table_of({0.4, 1.7, 12.0}, {3.3, 7.1, 19.0}, [](double gamma, double f) {
+    return TablePoint{std::sin(gamma) / 3, std::exp(-f) * 7, gamma / 3, f / 7, gamma > 1};
+  });
+  const std::string g_csv = damper_table_csv(g);
+  CHECK(g_csv.find("\n# rows = gamma\n") != std::string::npos);
+  CHECK(parse_damper_table_csv(g_csv, "csv") == g);
+  CHECK(damper_table_json(g).find("\"gammas\": [0.4, 1.7, 12]") != std::string::npos);
+  CHECK(parse_damper_table_json(damper_table_json(g), "json") == g);
+  std::string without_amplitudes;
+  std::istringstream lines(g_csv);
+  for (std::string line; std::getline(lines, line);) {
+    without_amplitudes += (line[0] == '#' ? line : line.substr(line.find(',') + 1)) + "\n";
+  }
+  CHECK(parse_damper_table_csv(without_amplitudes, "csv") == g);
   // A weightless table: gamma left empty.
   DamperTable w = t;
   w.gravity_m_s2 = 0;
@@ -505,6 +567,15 @@ TEST_CASE("rom: a bad table is refused with the reason") {
   csv_refuses(replaced(csv, "\n0.001,20,", "\n0.001,20,1.2,"), "fields for");
   const auto gamma_at = csv.find("\n0.01,20,") + 9;
   csv_refuses(csv.substr(0, gamma_at) + "1" + csv.substr(gamma_at), "but A (2 pi f)^2 / g");
+  // A table of Γ rows: its amplitudes follow from Γ, f and g; it needs its gamma column.
+  const DamperTable gammas = gamma_table_of({0.5, 2}, {10, 20}, [](double, double) { return TablePoint{}; });
+  const std::string g_csv = damper_table_csv(gammas);
+  csv_refuses(replaced(g_csv, "\n0.0012424", "\n0.0012425"), "but gamma g / (2 pi f)^2 = 0.0012424");
+  csv_refuses(replaced(g_csv, ",gamma,", ",gama,"), "unknown column 'gama'");
+  csv_refuses(replaced(g_csv, ",gamma,", ","), "column 'gamma' is missing (the table's rows are gammas");
+  csv_refuses(replaced(g_csv, "# rows = gamma", "# rows = gammas"), "rows = 'gammas': must be amplitude or gamma");
+  csv_refuses(replaced(g_csv, "# rows = gamma\n", "") + "# rows = gamma\n", "must come before the header row");
+  csv_refuses(replaced(g_csv, "# gravity_m_s2 = 9.81", "# gravity_m_s2 = 0"), "the rows are gammas but gravity_m_s2");
   // One frequency only.
   const DamperTable one = table_of({1e-4, 1e-3}, {10}, [](double, double) { return TablePoint{}; });
   refuses([&] { validate_damper_table(one, "t"); }, "1 frequency: the table needs at least two on each axis");
@@ -528,6 +599,9 @@ TEST_CASE("rom: a bad table is refused with the reason") {
   json_refuses(replaced(json, "[0.1, 0.1, 0.1]", "[0.1, \"0.1\", 0.1]"),
                "$.c_eq_N_s_m[0][1] is text: must be a number");
   json_refuses(replaced(json, "[true, true, true]", "[true, 1, true]"), "must be true or false");
+  json_refuses(replaced(json, "\"amplitudes_m\"", "\"gammas\": [1, 2], \"amplitudes_m\""),
+               "give exactly one of the members \"amplitudes_m\" (rows of amplitudes, m) and \"gammas\"");
+  json_refuses(replaced(json, "\"amplitudes_m\": [1e-04, 0.001, 0.01],", ""), "give exactly one of the members");
   // A source that would reach a terminal as an escape sequence.
   json_refuses(replaced(json, "\"source\": \"test\"", "\"source\": \"\\u001b[2Jx\""),
                "without control characters (27 at character 1)");

@@ -90,7 +90,7 @@ TEST_CASE("pdamp rom on a constant table predicts the linear SDOF closed form th
   rom::DamperTable table;
   table.source = "constant";
   table.bed_mass_kg = 0.004;
-  table.amplitudes_m = {1e-9, 1e-6, 1e-3, 1.0};
+  table.rows = {1e-9, 1e-6, 1e-3, 1.0};
   table.frequencies_hz = {2, 10, 30, 60};
   const double m = 0.004, c = 0.03;
   table.points.assign(16, rom::TablePoint{m, c, 0, 0, true});

@@ -105,16 +105,13 @@ rom::DamperTable characterisation_table(const po::variables_map& vm) {
   const std::string section = chosen("section", names, "sections");
   const auto& definition =
       *std::find_if(sections.begin(), sections.end(), [&](const auto& c) { return c.section == section; });
-  if (definition.axis == study::AmplitudeAxis::gamma) {
-    throw InputError(where + ": [" + section +
-                     "] gives gammas, so its amplitudes differ from frequency to frequency; the damper table is a "
-                     "grid of amplitude x frequency: characterise with amplitudes (m)");
-  }
+  const bool gammas = definition.axis == study::AmplitudeAxis::gamma;
   rom::DamperTable table;
+  table.row_axis = gammas ? rom::RowAxis::gamma : rom::RowAxis::amplitude;
   table.source =
       "study " + std::to_string(open.id) + " '" + open.record.name + "', [" + section + "], " + model + " model";
-  std::map<std::pair<double, double>, rom::TablePoint> grid;  // by (frequency, amplitude)
-  std::set<double> amplitudes, frequencies;
+  std::map<std::pair<double, double>, rom::TablePoint> grid;  // by (frequency, row: A or Γ)
+  std::set<double> rows, frequencies;
   int not_completed = 0;
   for (const auto& c : open.studies.characterise_points(open.id)) {
     if (c.place.model != model || open.study.points.at(static_cast<std::size_t>(c.point - 1)).section != section) {
@@ -127,9 +124,10 @@ rom::DamperTable characterisation_table(const po::variables_map& vm) {
     const CharacterisationMetrics& m = c.result->metrics;
     table.bed_mass_kg = c.result->particle_mass_kg;
     table.gravity_m_s2 = c.result->gravity_m_s2;
-    amplitudes.insert(c.place.amplitude_m);
+    const double row = gammas ? c.place.gamma_given.value() : c.place.amplitude_m;
+    rows.insert(row);
     frequencies.insert(c.place.frequency_hz);
-    grid[{c.place.frequency_hz, c.place.amplitude_m}] = {
+    grid[{c.place.frequency_hz, row}] = {
         {m.apparent_mass_kg, m.equivalent_damping_N_s_m, m.apparent_mass_spread_kg, m.equivalent_damping_spread_N_s_m},
         m.settled};
   }
@@ -137,10 +135,10 @@ rom::DamperTable characterisation_table(const po::variables_map& vm) {
     throw InputError(where + ": " + std::to_string(not_completed) + " of its " + model + " points in [" + section +
                      "] are not completed; run 'pdamp study resume " + std::to_string(open.id) + "' first");
   }
-  table.amplitudes_m.assign(amplitudes.begin(), amplitudes.end());
+  table.rows.assign(rows.begin(), rows.end());
   table.frequencies_hz.assign(frequencies.begin(), frequencies.end());
   for (const double f : table.frequencies_hz) {
-    for (const double a : table.amplitudes_m) table.points.push_back(grid.at({f, a}));
+    for (const double row : table.rows) table.points.push_back(grid.at({f, row}));
   }
   rom::validate_damper_table(table, where);
   return table;
@@ -203,8 +201,9 @@ std::string digits(double value, int digits, bool fixed = false) {
 void print_setup(std::ostream& out, const rom::PredictionSetup& setup) {
   const rom::DamperTable& t = *setup.table;
   out << printable("table " + setup.table_name + " (" + t.source + ")") << ": bed mass " << t.bed_mass_kg << " kg, "
-      << t.amplitudes_m.size() << " amplitudes " << t.amplitudes_m.front() << " to " << t.amplitudes_m.back() << " m x "
-      << t.frequencies_hz.size() << " frequencies " << t.frequencies_hz.front() << " to " << t.frequencies_hz.back()
+      << t.rows.size() << (t.row_axis == rom::RowAxis::gamma ? " gammas " : " amplitudes ") << t.rows.front() << " to "
+      << t.rows.back() << (t.row_axis == rom::RowAxis::gamma ? " x " : " m x ") << t.frequencies_hz.size()
+      << " frequencies " << t.frequencies_hz.front() << " to " << t.frequencies_hz.back()
       << " Hz\nhost M = " << setup.host.mass_kg << " kg, K = " << setup.host.stiffness_N_m
       << " N/m, C = " << setup.host.damping_N_s_m << " N s/m; " << rom::excitation_text(setup.excitation) << "; "
       << rom::range_text(setup.range) << "\n";

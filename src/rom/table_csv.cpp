@@ -1,5 +1,5 @@
-/// The damper table as CSV: '#' comment lines (four of them `# key = value` metadata), a
-/// header row, then one row per grid point, frequency by frequency.
+/// The damper table as CSV: '#' comment lines (four or five of them `# key = value`
+/// metadata), a header row, then one row per grid point, frequency by frequency.
 
 #include <algorithm>
 #include <charconv>
@@ -15,14 +15,17 @@
 namespace pdamp::rom {
 namespace {
 
-/// The columns in the order they are written. `gamma` is derived (A (2πf)² / g; empty for a
-/// weightless table) and checked on reading.
+/// The columns in the order they are written. Of `amplitude_m` and `gamma` (A (2πf)² / g;
+/// empty for a weightless table) the one that is not the table's rows is derived, optional
+/// and checked on reading.
 const std::vector<std::string> columns = {"amplitude_m",     "frequency_hz",      "gamma",  "m_app_kg", "c_eq_N_s_m",
                                           "m_app_spread_kg", "c_eq_spread_N_s_m", "settled"};
 const std::vector<std::string> metadata_keys = {"format", "source", "bed_mass_kg", "gravity_m_s2"};
+/// `rows = gamma` for a table of Γ rows; without it the rows are amplitudes.
+const std::string rows_key = "rows";
 
-/// Γ written and the Γ recomputed from A, f and g may differ in the last digits.
-constexpr double gamma_tolerance = 1e-9;
+/// A derived value written and the one recomputed from the rows, f and g may differ in the last digits.
+constexpr double derived_tolerance = 1e-9;
 
 std::string trim(const std::string& s) {
   const auto first = s.find_first_not_of(" \t\r");
@@ -39,8 +42,8 @@ std::vector<std::string> split(const std::string& line) {
 }
 
 struct Row {
-  double amplitude_m, frequency_hz;
-  std::optional<double> gamma;
+  std::optional<double> amplitude_m, gamma;
+  double frequency_hz;
   TablePoint point;
   int line;
 };
@@ -85,8 +88,9 @@ class CsvReader {
     const auto equals = line.find('=');
     if (equals == std::string::npos) return;
     const std::string key = trim(line.substr(1, equals - 1));
-    if (std::find(metadata_keys.begin(), metadata_keys.end(), key) == metadata_keys.end()) return;
+    if (key != rows_key && std::find(metadata_keys.begin(), metadata_keys.end(), key) == metadata_keys.end()) return;
     if (metadata_.count(key)) fail(line_number, "'" + key + "' is given twice");
+    if (key == rows_key && !header_.empty()) fail(line_number, "'# rows = ...' must come before the header row");
     metadata_[key] = {trim(line.substr(equals + 1)), line_number};
   }
 
@@ -98,9 +102,11 @@ class CsvReader {
       }
       if (std::count(header_.begin(), header_.end(), name) > 1) fail(line_number, "column '" + name + "' twice");
     }
+    const std::string derived = rows_are_gammas() ? "amplitude_m" : "gamma";
     for (const auto& name : columns) {
-      if (name != "gamma" && std::find(header_.begin(), header_.end(), name) == header_.end()) {
-        fail(line_number, "column '" + name + "' is missing");
+      if (name != derived && std::find(header_.begin(), header_.end(), name) == header_.end()) {
+        fail(line_number, "column '" + name + "' is missing" +
+                              (name == "gamma" ? " (the table's rows are gammas: '# rows = gamma')" : ""));
       }
     }
   }
@@ -119,9 +125,10 @@ class CsvReader {
         row.point.settled = fields[c] == "1";
       } else if (name == "gamma") {
         if (!fields[c].empty()) row.gamma = parse_number(fields[c], name, line_number);
+      } else if (name == "amplitude_m") {
+        if (!fields[c].empty() || !rows_are_gammas()) row.amplitude_m = parse_number(fields[c], name, line_number);
       } else {
         const double v = parse_number(fields[c], name, line_number);
-        if (name == "amplitude_m") row.amplitude_m = v;
         if (name == "frequency_hz") row.frequency_hz = v;
         if (name == "m_app_kg") row.point.m_app_kg = v;
         if (name == "c_eq_N_s_m") row.point.c_eq_N_s_m = v;
@@ -129,7 +136,11 @@ class CsvReader {
         if (name == "c_eq_spread_N_s_m") row.point.c_eq_spread_N_s_m = v;
       }
     }
-    if (!(row.amplitude_m > 0)) fail(line_number, "amplitude_m = " + text::number(row.amplitude_m) + ": must be > 0");
+    if (rows_are_gammas() && !row.gamma) fail(line_number, "gamma is empty: the table's rows are gammas");
+    if (!(row_value(row) > 0)) {
+      fail(line_number,
+           (rows_are_gammas() ? "gamma = " : "amplitude_m = ") + text::number(row_value(row)) + ": must be > 0");
+    }
     if (!(row.frequency_hz > 0))
       fail(line_number, "frequency_hz = " + text::number(row.frequency_hz) + ": must be > 0");
     return row;
@@ -139,11 +150,16 @@ class CsvReader {
     for (const auto& key : metadata_keys) {
       if (!metadata_.count(key)) throw InputError(where_ + ": the comment line '# " + key + " = ...' is missing");
     }
+    if (metadata_.count(rows_key)) {
+      const auto& [rows, line] = metadata_.at(rows_key);
+      if (rows != "gamma" && rows != "amplitude") fail(line, "rows = '" + rows + "': must be amplitude or gamma");
+    }
     const auto& [format, format_line] = metadata_.at("format");
     if (format != table_csv_format) {
       fail(format_line, "format '" + format + "': this pdamp reads '" + table_csv_format + "'");
     }
     table.source = metadata_.at("source").first;
+    table.row_axis = rows_are_gammas() ? RowAxis::gamma : RowAxis::amplitude;
     for (const auto& [key, target] :
          {std::pair{"bed_mass_kg", &table.bed_mass_kg}, {"gravity_m_s2", &table.gravity_m_s2}}) {
       const auto& [value, line] = metadata_.at(key);
@@ -151,20 +167,27 @@ class CsvReader {
     }
   }
 
-  /// The grid from the rows: every distinct amplitude with every distinct frequency, once.
+  bool rows_are_gammas() const {
+    const auto rows = metadata_.find(rows_key);
+    return rows != metadata_.end() && rows->second.first == "gamma";
+  }
+
+  double row_value(const Row& r) const { return rows_are_gammas() ? *r.gamma : *r.amplitude_m; }
+
+  /// The grid from the rows: every distinct row value with every distinct frequency, once.
   DamperTable assemble() const {
     DamperTable table;
     read_metadata(table);
     if (header_.empty()) throw InputError(where_ + ": no header row (and no points)");
     for (const Row& r : rows_) {
-      table.amplitudes_m.push_back(r.amplitude_m);
+      table.rows.push_back(row_value(r));
       table.frequencies_hz.push_back(r.frequency_hz);
     }
-    for (auto* axis : {&table.amplitudes_m, &table.frequencies_hz}) {
+    for (auto* axis : {&table.rows, &table.frequencies_hz}) {
       std::sort(axis->begin(), axis->end());
       axis->erase(std::unique(axis->begin(), axis->end()), axis->end());
     }
-    const std::size_t na = table.amplitudes_m.size(), nf = table.frequencies_hz.size();
+    const std::size_t na = table.rows.size(), nf = table.frequencies_hz.size();
     if (na >= 2 && nf >= 2) place_rows(table);
     validate_damper_table(table, where_);
     return table;
@@ -174,39 +197,42 @@ class CsvReader {
     const auto index = [](const std::vector<double>& axis, double v) {
       return static_cast<std::size_t>(std::lower_bound(axis.begin(), axis.end(), v) - axis.begin());
     };
-    const std::size_t na = table.amplitudes_m.size(), nf = table.frequencies_hz.size();
+    const std::size_t na = table.rows.size(), nf = table.frequencies_hz.size();
     std::vector<int> line_of(na * nf, 0);
     table.points.resize(na * nf);
     for (const Row& r : rows_) {
-      const std::size_t i = index(table.amplitudes_m, r.amplitude_m), j = index(table.frequencies_hz, r.frequency_hz);
+      const std::size_t i = index(table.rows, row_value(r)), j = index(table.frequencies_hz, r.frequency_hz);
       int& seen = line_of[j * na + i];
-      if (seen)
-        fail(r.line, "the point A = " + text::number(r.amplitude_m) + " m, f = " + text::number(r.frequency_hz) +
-                         " Hz is also on line " + std::to_string(seen));
+      if (seen) fail(r.line, "the point " + describe_point(table, i, j) + " is also on line " + std::to_string(seen));
       seen = r.line;
       table.at(i, j) = r.point;
-      check_gamma(table, r, i, j);
+      check_derived(table, r, i, j);
     }
     const auto missing = std::find(line_of.begin(), line_of.end(), 0);
     if (missing != line_of.end()) {
       const auto k = static_cast<std::size_t>(missing - line_of.begin());
       throw InputError(where_ + ": the grid is not rectangular: " + std::to_string(rows_.size()) + " points for " +
-                       std::to_string(na) + " amplitudes x " + std::to_string(nf) +
-                       " frequencies; there is no point at A = " + text::number(table.amplitudes_m[k % na]) +
-                       " m, f = " + text::number(table.frequencies_hz[k / na]) + " Hz");
+                       std::to_string(na) + (rows_are_gammas() ? " gammas x " : " amplitudes x ") + std::to_string(nf) +
+                       " frequencies; there is no point at " + describe_point(table, k % na, k / na));
     }
   }
 
-  void check_gamma(const DamperTable& table, const Row& r, std::size_t i, std::size_t j) const {
-    if (table.gravity_m_s2 == 0) {
-      if (r.gamma) fail(r.line, "gamma is given but the table is weightless (gravity_m_s2 = 0): leave it empty");
+  /// The column that is not the rows, where given, must follow from them.
+  void check_derived(const DamperTable& table, const Row& r, std::size_t i, std::size_t j) const {
+    const bool gammas = table.row_axis == RowAxis::gamma;
+    if (table.gravity_m_s2 == 0) {  // Γ rows without gravity: validate_damper_table names it
+      if (r.gamma && !gammas) {
+        fail(r.line, "gamma is given but the table is weightless (gravity_m_s2 = 0): leave it empty");
+      }
       return;
     }
-    if (!r.gamma) return;
-    const double expected = table.gamma(i, j);
-    if (std::abs(*r.gamma - expected) > gamma_tolerance * expected) {
-      fail(r.line, "gamma = " + text::number(*r.gamma) + " but A (2 pi f)^2 / g = " + text::number(expected) +
-                       " (gravity_m_s2 = " + text::number(table.gravity_m_s2) + ")");
+    const std::optional<double> given = gammas ? r.amplitude_m : r.gamma;
+    if (!given) return;
+    const double expected = gammas ? table.amplitude_m(i, j) : table.gamma(i, j);
+    if (std::abs(*given - expected) > derived_tolerance * expected) {
+      fail(r.line, (gammas ? "amplitude_m = " + text::number(*given) + " but gamma g / (2 pi f)^2 = "
+                           : "gamma = " + text::number(*given) + " but A (2 pi f)^2 / g = ") +
+                       text::number(expected) + " (gravity_m_s2 = " + text::number(table.gravity_m_s2) + ")");
     }
   }
 
@@ -223,16 +249,17 @@ std::string damper_table_csv(const DamperTable& table) {
   out << "# format = " << table_csv_format << "\n"
       << "# source = " << table.source << "\n"
       << "# bed_mass_kg = " << text::number(table.bed_mass_kg) << "\n"
-      << "# gravity_m_s2 = " << text::number(table.gravity_m_s2) << "\n"
-      << "# Container motion z = A sin(2 pi f t); the particles' first-harmonic force on it is\n"
+      << "# gravity_m_s2 = " << text::number(table.gravity_m_s2) << "\n";
+  if (table.row_axis == RowAxis::gamma) out << "# " << rows_key << " = gamma\n";
+  out << "# Container motion z = A sin(2 pi f t); the particles' first-harmonic force on it is\n"
       << "# -m_app z'' - c_eq z'. Units: A in m, f in Hz, m_app in kg, c_eq in N s/m; gamma = A (2 pi f)^2 / g;\n"
       << "# spreads: standard deviation over the averaged steady cycles; settled: 1 steady state reached, 0 not.\n";
   for (std::size_t c = 0; c < columns.size(); ++c) out << (c ? "," : "") << columns[c];
   out << "\n";
   for (std::size_t j = 0; j < table.frequencies_hz.size(); ++j) {
-    for (std::size_t i = 0; i < table.amplitudes_m.size(); ++i) {
+    for (std::size_t i = 0; i < table.rows.size(); ++i) {
       const TablePoint& p = table.at(i, j);
-      out << text::number(table.amplitudes_m[i]) << "," << text::number(table.frequencies_hz[j]) << ","
+      out << text::number(table.amplitude_m(i, j)) << "," << text::number(table.frequencies_hz[j]) << ","
           << (table.gravity_m_s2 > 0 ? text::number(table.gamma(i, j)) : "") << "," << text::number(p.m_app_kg) << ","
           << text::number(p.c_eq_N_s_m) << "," << text::number(p.m_app_spread_kg) << ","
           << text::number(p.c_eq_spread_N_s_m) << "," << (p.settled ? 1 : 0) << "\n";

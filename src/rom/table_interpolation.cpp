@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace pdamp::rom {
 namespace {
@@ -34,7 +35,7 @@ DamperValues AmplitudeProfile::in_segment(std::size_t k, double s) const {
 
 TableInterpolator::TableInterpolator(DamperTable table, const std::string& where) : table_(std::move(table)) {
   validate_damper_table(table_, where);
-  for (const double a : table_.amplitudes_m) log_amplitudes_.push_back(std::log(a));
+  for (const double row : table_.rows) log_rows_.push_back(std::log(row));
 }
 
 std::vector<TableInterpolator::ColumnWeight> TableInterpolator::columns_at(double frequency_hz) const {
@@ -47,19 +48,26 @@ std::vector<TableInterpolator::ColumnWeight> TableInterpolator::columns_at(doubl
 }
 
 double TableInterpolator::log_shift(std::size_t column, double frequency_hz) const {
-  // Same Γ = A ω² / g in column c: A_c = A (f / f_c)². Weightless (g = 0): A_c = A.
+  if (table_.row_axis == RowAxis::gamma) {  // the row of every column: Γ = A ω² / g
+    const double omega = 2 * std::numbers::pi * frequency_hz;
+    return std::log(omega * omega / table_.gravity_m_s2);
+  }
+  // Same Γ in column c: A_c = A (f / f_c)². Weightless (g = 0): A_c = A.
   const double exponent = table_.gravity_m_s2 > 0 ? 2.0 : 0.0;
   return exponent * std::log(frequency_hz / table_.frequencies_hz[column]);
 }
 
 bool TableInterpolator::add_column(std::size_t column, double s, double weight, DamperValues& sum,
                                    bool& unsettled) const {
-  const auto& la = log_amplitudes_;
+  const auto& la = log_rows_;
   if (s < la.front() - same_log_amplitude || s > la.back() + same_log_amplitude) return false;
   s = std::clamp(s, la.front(), la.back());
-  const std::size_t i = static_cast<std::size_t>(std::lower_bound(la.begin(), la.end(), s) - la.begin());
+  std::size_t i = static_cast<std::size_t>(std::lower_bound(la.begin(), la.end(), s) - la.begin());
+  // A node is met exactly, also through the rounding of a Γ mapped from A and f.
+  const bool at_node = la[i] - s <= same_log_amplitude || s - la[i - 1] <= same_log_amplitude;
+  if (at_node && la[i] - s > same_log_amplitude) --i;
   const TablePoint& upper = table_.at(i, column);
-  if (la[i] == s) {
+  if (at_node) {
     add_scaled(sum, upper, weight);
     unsettled = unsettled || !upper.settled;
     return true;
@@ -94,14 +102,14 @@ AmplitudeProfile TableInterpolator::profile(double frequency_hz) const {
   double low = -HUGE_VAL, high = HUGE_VAL;
   for (const auto& c : columns) {
     const double shift = log_shift(c.column, frequency_hz);
-    low = std::max(low, log_amplitudes_.front() - shift);
-    high = std::min(high, log_amplitudes_.back() - shift);
+    low = std::max(low, log_rows_.front() - shift);
+    high = std::min(high, log_rows_.back() - shift);
   }
   if (!(high - low > same_log_amplitude)) return profile;
   std::vector<double> knots{low, high};
   for (const auto& c : columns) {
     const double shift = log_shift(c.column, frequency_hz);
-    for (const double s : log_amplitudes_) {
+    for (const double s : log_rows_) {
       if (s - shift > low && s - shift < high) knots.push_back(s - shift);
     }
   }

@@ -1,5 +1,5 @@
 /// The damper table as JSON: the axes as arrays, each quantity as an array of rows, one row per
-/// frequency, one value per amplitude. Read with SQLite's JSON functions (strict RFC 8259
+/// frequency, one value per amplitude (or Γ). Read with SQLite's JSON functions (strict RFC 8259
 /// syntax in SQLite 3.40), so no JSON library is needed.
 
 #include <algorithm>
@@ -24,9 +24,13 @@ constexpr Quantity quantities[] = {{"m_app_kg", &TablePoint::m_app_kg},
                                    {"m_app_spread_kg", &TablePoint::m_app_spread_kg},
                                    {"c_eq_spread_N_s_m", &TablePoint::c_eq_spread_N_s_m}};
 
-const std::vector<std::string> keys = {
-    "format",         "format_version", "source",     "bed_mass_kg",     "gravity_m_s2",      "amplitudes_m",
-    "frequencies_hz", "m_app_kg",       "c_eq_N_s_m", "m_app_spread_kg", "c_eq_spread_N_s_m", "settled"};
+const std::vector<std::string> keys = {"format",          "format_version",    "source",   "bed_mass_kg",
+                                       "gravity_m_s2",    "frequencies_hz",    "m_app_kg", "c_eq_N_s_m",
+                                       "m_app_spread_kg", "c_eq_spread_N_s_m", "settled"};
+/// The rows' axis, exactly one of them.
+constexpr const char* amplitude_rows = "amplitudes_m";
+constexpr const char* gamma_rows = "gammas";
+const char* rows_key(RowAxis axis) { return axis == RowAxis::gamma ? gamma_rows : amplitude_rows; }
 
 /// The document's every node by its path ($.key[j][i]), from one pass of SQLite's json_tree.
 class JsonReader {
@@ -63,9 +67,10 @@ class JsonReader {
     table.source = string_at("$.source");
     table.bed_mass_kg = number_at("$.bed_mass_kg");
     table.gravity_m_s2 = number_at("$.gravity_m_s2");
-    table.amplitudes_m = numbers_at("$.amplitudes_m");
+    table.row_axis = nodes_.count(std::string("$.") + gamma_rows) ? RowAxis::gamma : RowAxis::amplitude;
+    table.rows = numbers_at(std::string("$.") + rows_key(table.row_axis));
     table.frequencies_hz = numbers_at("$.frequencies_hz");
-    const std::size_t na = table.amplitudes_m.size(), nf = table.frequencies_hz.size();
+    const std::size_t na = table.rows.size(), nf = table.frequencies_hz.size();
     table.points.resize(na * nf);
     for (const Quantity& q : quantities) {
       read_grid(q.key, na, nf, [&](std::size_t i, std::size_t j, const std::string& path) {
@@ -94,12 +99,17 @@ class JsonReader {
   void check_members() const {
     if (type_at("$") != "object") fail("the document must be a JSON object");
     for (const auto& member : members_) {
-      if (std::find(keys.begin(), keys.end(), member) == keys.end()) {
+      if (member != amplitude_rows && member != gamma_rows &&
+          std::find(keys.begin(), keys.end(), member) == keys.end()) {
         fail("unknown member \"" + member + "\" (the members are those of docs/rom.md, \"Table files\")");
       }
     }
     for (const auto& key : keys) {
       if (!nodes_.count("$." + key)) fail("member \"" + key + "\" is missing");
+    }
+    if (nodes_.count(std::string("$.") + amplitude_rows) == nodes_.count(std::string("$.") + gamma_rows)) {
+      fail(std::string("give exactly one of the members \"") + amplitude_rows + "\" (rows of amplitudes, m) and \"" +
+           gamma_rows + "\" (rows of Gamma)");
     }
   }
 
@@ -135,6 +145,7 @@ class JsonReader {
   /// Visits key[j][i] for every frequency j and amplitude i, after checking the shape.
   template <class Visit>
   void read_grid(const std::string& key, std::size_t na, std::size_t nf, Visit visit) const {
+    const std::string rows = nodes_.count(std::string("$.") + gamma_rows) ? " gammas" : " amplitudes";
     const std::string path = "$." + key;
     if (array_length(path) != nf) {
       fail(path + " has " + std::to_string(array_length(path)) + " rows for " + std::to_string(nf) +
@@ -143,8 +154,8 @@ class JsonReader {
     for (std::size_t j = 0; j < nf; ++j) {
       const std::string row = path + "[" + std::to_string(j) + "]";
       if (array_length(row) != na) {
-        fail(row + " has " + std::to_string(array_length(row)) + " values for " + std::to_string(na) +
-             " amplitudes: the grid must be rectangular (one value per amplitude)");
+        fail(row + " has " + std::to_string(array_length(row)) + " values for " + std::to_string(na) + rows +
+             ": the grid must be rectangular (one value per row)");
       }
       for (std::size_t i = 0; i < na; ++i) visit(i, j, row + "[" + std::to_string(i) + "]");
     }
@@ -160,7 +171,7 @@ void write_grid(std::ostream& out, const DamperTable& table, const char* key, Va
   out << ",\n  " << text::json_string(key) << ": [";
   for (std::size_t j = 0; j < table.frequencies_hz.size(); ++j) {
     out << (j ? ",\n    [" : "\n    [");
-    for (std::size_t i = 0; i < table.amplitudes_m.size(); ++i) out << (i ? ", " : "") << value(table.at(i, j));
+    for (std::size_t i = 0; i < table.rows.size(); ++i) out << (i ? ", " : "") << value(table.at(i, j));
     out << "]";
   }
   out << "\n  ]";
@@ -180,7 +191,7 @@ std::string damper_table_json(const DamperTable& table) {
       << ",\n  \"format_version\": " << table_json_version << ",\n  \"source\": " << text::json_string(table.source)
       << ",\n  \"bed_mass_kg\": " << text::json_number(table.bed_mass_kg)
       << ",\n  \"gravity_m_s2\": " << text::json_number(table.gravity_m_s2);
-  write_axis(out, "amplitudes_m", table.amplitudes_m);
+  write_axis(out, rows_key(table.row_axis), table.rows);
   write_axis(out, "frequencies_hz", table.frequencies_hz);
   for (const Quantity& q : quantities) {
     write_grid(out, table, q.key, [&](const TablePoint& p) { return text::json_number(p.*q.member); });

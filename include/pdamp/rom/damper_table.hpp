@@ -4,7 +4,8 @@
 ///
 /// The container is driven with z = A sin(2πft); the first harmonic of the particles' force on
 /// it, F_p,1 = −m_app z̈₁ − c_eq ż₁, gives the apparent mass m_app and the equivalent damping
-/// c_eq at each (A, f) of a rectangular grid.
+/// c_eq at each point of a rectangular grid: amplitude × frequency, or Γ × frequency (each
+/// column then at the amplitudes A = Γ g / (2πf)², as a `gammas` characterisation runs).
 
 #include <cstddef>
 #include <string>
@@ -33,33 +34,48 @@ struct TablePoint : DamperValues {
   bool operator==(const TablePoint&) const = default;
 };
 
+/// What the rows of the grid are.
+enum class RowAxis {
+  amplitude,  ///< container displacement amplitudes A (m), the same in every column
+  gamma,      ///< peak accelerations over g, Γ = A (2πf)² / g: A differs from column to column
+};
+
 struct DamperTable {
   /// Where the table came from (free text: a study, a file, "synthetic ...").
   std::string source;
-  double bed_mass_kg = 0.0;            ///< m_p, the mass of the particles (≥ 0)
-  double gravity_m_s2 = 9.81;          ///< |g| during the characterisation (0: weightless), for Γ = A(2πf)²/g
-  std::vector<double> amplitudes_m;    ///< container displacement amplitudes A, increasing, > 0
+  double bed_mass_kg = 0.0;    ///< m_p, the mass of the particles (≥ 0)
+  double gravity_m_s2 = 9.81;  ///< |g| during the characterisation (0: weightless), for Γ = A(2πf)²/g
+  RowAxis row_axis = RowAxis::amplitude;
+  /// The rows: amplitudes A in m, or Γ (dimensionless, needs g > 0); increasing, > 0.
+  std::vector<double> rows;
   std::vector<double> frequencies_hz;  ///< frequencies f, increasing, > 0
-  /// points[j * amplitudes_m.size() + i] is the point at amplitudes_m[i], frequencies_hz[j].
+  /// points[j * rows.size() + i] is the point at rows[i], frequencies_hz[j].
   std::vector<TablePoint> points;
 
-  const TablePoint& at(std::size_t amplitude_index, std::size_t frequency_index) const {
-    return points[frequency_index * amplitudes_m.size() + amplitude_index];
+  const TablePoint& at(std::size_t row_index, std::size_t frequency_index) const {
+    return points[frequency_index * rows.size() + row_index];
   }
-  TablePoint& at(std::size_t amplitude_index, std::size_t frequency_index) {
-    return points[frequency_index * amplitudes_m.size() + amplitude_index];
+  TablePoint& at(std::size_t row_index, std::size_t frequency_index) {
+    return points[frequency_index * rows.size() + row_index];
   }
+  /// The container amplitude A (m) at a grid point.
+  double amplitude_m(std::size_t row_index, std::size_t frequency_index) const;
   /// Γ = A (2πf)² / g at a grid point (infinite when g = 0).
-  double gamma(std::size_t amplitude_index, std::size_t frequency_index) const;
+  double gamma(std::size_t row_index, std::size_t frequency_index) const;
 
   /// Every field and value equal (a file read back to the table it was written from).
   bool operator==(const DamperTable&) const = default;
 };
 
+std::string to_string(RowAxis axis);  ///< "amplitude" or "gamma", as files name it
+
+/// "A = 0.001 m, f = 20 Hz" or "Gamma = 2, f = 20 Hz": a grid point for messages.
+std::string describe_point(const DamperTable& table, std::size_t row_index, std::size_t frequency_index);
+
 /// Throws InputError naming the first problem, prefixed by `where` (a file name): fewer than
 /// two values on an axis, axes not strictly increasing or not positive, a point count that is
-/// not amplitudes × frequencies, non-finite values, negative spreads, a negative bed mass or
-/// gravity.
+/// not rows × frequencies, non-finite values, negative spreads, a negative bed mass or
+/// gravity, Γ rows in a weightless table.
 void validate_damper_table(const DamperTable& table, const std::string& where);
 
 }  // namespace pdamp::rom

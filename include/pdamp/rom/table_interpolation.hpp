@@ -4,7 +4,8 @@
 /// Between two frequency columns f_j < f < f_j+1 the table is interpolated at constant
 /// Γ = A ω² / g: the query amplitude A maps to A_c = A (f / f_c)² in column c, each column is
 /// interpolated linearly in log A_c between its nodes, and the two columns are blended linearly
-/// in f. In a weightless table (g = 0) the columns are read at A itself. Every interpolated
+/// in f. In a weightless table (g = 0) the columns are read at A itself; in a table of Γ rows
+/// every column is read at the query's Γ = A (2πf)² / g. Every interpolated
 /// value is a convex combination of at most four nodes, so it never leaves their range, and it
 /// is exact on the nodes. A query outside the characterised grid is never extrapolated.
 
@@ -55,13 +56,13 @@ class TableInterpolator {
   };
   /// The one or two frequency columns that f blends, with their weights (summing to 1).
   std::vector<ColumnWeight> columns_at(double frequency_hz) const;
-  /// ln of the factor that maps an amplitude at `frequency_hz` to column c at the same Γ.
+  /// ln of the factor that maps an amplitude at `frequency_hz` to column c's row at the same Γ.
   double log_shift(std::size_t column, double frequency_hz) const;
-  /// Adds weight × column c's value at ln A_c = s into `sum`; false if s is outside the column.
+  /// Adds weight × column c's value at row ln r = s into `sum`; false if s is outside the column.
   bool add_column(std::size_t column, double s, double weight, DamperValues& sum, bool& unsettled) const;
 
   DamperTable table_;
-  std::vector<double> log_amplitudes_;
+  std::vector<double> log_rows_;  ///< ln of the rows
 };
 
 }  // namespace pdamp::rom

@@ -389,8 +389,10 @@ TEST_CASE(
   const std::pair<std::string, std::string> sections[] = {
       {"frf", "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.05\nfrequencies = 15, 17\n"},
       {"characterise", "[characterise]\namplitudes = 0.0005, 0.0015\nfrequencies = 15, 20\n"}};
-  for (const auto& [section, keys] : sections) {
+  for (const auto& entry : sections) {
+    const std::string& section = entry.first;  // by name: clang before 16 cannot capture a structured binding
     CAPTURE(section);
+    const std::string& keys = entry.second;
     const auto file = dir / (section + ".ini");
     test::write_file(file, "[study]\nname = " + section + "\nscenario = " + small() + "\nmodels = hard\n\n" + keys);
     const study::Study s = study::make_study(study::read_study_source(file), false);

@@ -181,7 +181,8 @@ TEST_CASE("the hard engine's benchmark refuses bad options with code 2, naming t
       {{"--frobnicate", "1"}, "unrecognised option '--frobnicate'"},
       {{"--packing", "0.6"}, "at most 978 spheres"},  // the placement's own refusal
   };
-  for (const auto& [args, expected] : cases) {
+  for (const auto& [args, message] : cases) {
+    const std::string& expected = message;  // by name: clang before 16 cannot capture a structured binding
     CAPTURE(expected);
     const Result r = pdamp_cli(args, dir, PDAMP_BENCH_EXECUTABLE);
     CHECK(r.code == 2);
@@ -545,7 +546,7 @@ TEST_CASE("another program's database and an empty file are left as they were") 
     sqlite::Database d(foreign);
     d.exec("CREATE TABLE notes (text); INSERT INTO notes VALUES ('mine')");
   }
-  std::ofstream{empty};
+  { std::ofstream created(empty); }
   const std::string before = file_bytes(foreign);
   for (const auto& args : store_commands(foreign)) {
     CAPTURE(args[0]);
@@ -788,7 +789,8 @@ TEST_CASE("pdamp compare runs both models from one bed and stores their comparis
   CHECK(same("SELECT hard_events FROM comparisons", in_run("SELECT collisions FROM " + last, 2)));
   CHECK(same("SELECT wall_time_ratio FROM comparisons",
              "SELECT s.wall_time_s / h.wall_time_s FROM runs s, runs h WHERE s.run_id = 1 AND h.run_id = 2"));
-  for (const auto& [model, run] : {std::pair{"soft", 1}, std::pair{"hard", 2}}) {
+  for (const auto& [name, run] : {std::pair{"soft", 1}, std::pair{"hard", 2}}) {
+    const char* const model = name;  // by name: clang before 16 cannot capture a structured binding
     CAPTURE(model);
     CHECK(same(std::string("SELECT friction_J FROM comparison_energy WHERE t_s = 0.05 AND model = '") + model + "'",
                in_run("SELECT dissipated_friction_J FROM samples WHERE run_id = ?1 AND t_s <= 0.05 "

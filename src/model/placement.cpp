@@ -122,7 +122,7 @@ class HcpLattice {
 Eigen::Vector3d random_in_ball(std::mt19937_64& rng) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   for (;;) {
-    const Eigen::Vector3d p(unit(rng), unit(rng), unit(rng));
+    Eigen::Vector3d p(unit(rng), unit(rng), unit(rng));
     if (p.squaredNorm() <= 1.0) return p;
   }
 }

@@ -57,7 +57,7 @@ CollectReport collect_shards(RunStore& store, const StudyRecord& study, const st
         report.merged.push_back(std::move(merge));
       }
     } catch (const InputError& e) {
-      report.refused.push_back(e.what());
+      report.refused.emplace_back(e.what());
     }
   }
   return report;
@@ -85,8 +85,9 @@ std::vector<TaskView> task_views(StudyStore& studies, std::int64_t study_id, con
   std::vector<TaskView> views;
   for (auto& task : studies.tasks(study_id)) views.push_back({std::move(task), TaskStanding::missing, "", {}});
   for (const auto& [key, found] : files) {  // shards of tasks the store does not know (a lost submission)
-    const bool known = std::any_of(views.begin(), views.end(), [&](const TaskView& v) {
-      return v.task.job_id == key.first && v.task.task == key.second;
+    // The key by name: clang before 16 cannot capture a structured binding.
+    const bool known = std::any_of(views.begin(), views.end(), [&job_task = key](const TaskView& v) {
+      return v.task.job_id == job_task.first && v.task.task == job_task.second;
     });
     if (!known)
       views.push_back(

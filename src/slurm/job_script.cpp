@@ -98,7 +98,7 @@ std::vector<ShardFolder::Found> ShardFolder::scan() const {
 
 // #SBATCH lines are split at white space and scanned for '%' patterns.
 std::string checked_script_path(const std::filesystem::path& path) {
-  const std::string text = path.string();
+  std::string text = path.string();
   const auto bad = std::find_if(text.begin(), text.end(), [](unsigned char c) {
     return c <= ' ' || c == 0x7f || c == '%' || c == '"' || c == '\'' || c == '\\';
   });

@@ -40,6 +40,7 @@ struct Pipe {
 
 pid_t spawn(const std::vector<std::string>& argv, Pipe& out, Pipe& err) {
   std::vector<char*> words;
+  words.reserve(argv.size() + 1);
   std::vector<std::string> copy = argv;
   for (auto& word : copy) words.push_back(word.data());
   words.push_back(nullptr);

@@ -39,13 +39,13 @@ template <class Pass>
 /// One sphere's ball per lane: x, y, z, radius.
 template <class Real>
 [[gnu::always_inline]] inline Fields4<Real> gather_balls(const double* balls, const int* sphere) {
-  return load_records<Real>([&](int l) { return balls + 4 * sphere[l]; });
+  return load_records<Real>([&](int l) { return balls + 4 * std::ptrdiff_t{sphere[l]}; });
 }
 
 /// One sphere's vector (velocity or spin) per lane.
 template <class Real>
 [[gnu::always_inline]] inline Vec3<Real> gather_vectors(const SphereMotions& motions, const int* sphere) {
-  const Fields4<Real> f = load_records<Real>([&](int l) { return motions.data() + 4 * sphere[l]; });
+  const Fields4<Real> f = load_records<Real>([&](int l) { return motions.data() + 4 * std::ptrdiff_t{sphere[l]}; });
   return {f.a, f.b, f.c};
 }
 
@@ -288,7 +288,7 @@ bool SoftEngine::drift_chunk(int c, double kick_s, double dt_s) {
                       *const z0 = x_at_rebuild_.z.data();
   bool beyond_skin = false;
   auto drift = [&]<class R>(int s) [[gnu::always_inline]] {
-    const auto record = [&](double* records) { return [=](int l) { return records + 4 * (s + l); }; };
+    const auto record = [&](double* records) { return [=](int l) { return records + 4 * std::ptrdiff_t{s + l}; }; };
     const Fields4<R> v = load_records<R>(record(velocities)), w = load_records<R>(record(spins));
     const R linear = v.d * kick_s, angular = w.d * kick_s;  // times 1/m, 1/I
     const R new_vx = v.a + load<R>(fx + s) * linear, new_vy = v.b + load<R>(fy + s) * linear,
@@ -445,7 +445,7 @@ void SoftEngine::compute_forces(double dt_s) {
   // same bits whatever the number of threads.
   scratch_.resize(std::max<std::size_t>(scratch_.size(), omp_get_max_threads()));
   for (PassScratch& scratch : scratch_) {
-    const auto size = static_cast<std::size_t>(most_pairs_in_a_chunk_ + NeighbourList::padding);
+    const auto size = static_cast<std::size_t>(most_pairs_in_a_chunk_) + NeighbourList::padding;
     if (scratch.pairs.size() < size) scratch.pairs.resize(size);
   }
   ForcePass pass{*this, dt_s};
@@ -582,7 +582,7 @@ std::array<int, 3> SoftEngine::list_wall_contacts_to_evaluate(int first, int end
   const double bottom_z = host_.z_m, top_z = host_.z_m + cavity_.height_m();
   std::array<int, 3> count{};
   for_each_register<Real>(first, end, [&]<class R>(int s) [[gnu::always_inline]] {
-    const Fields4<R> ball = load_records<R>([&](int l) { return balls + 4 * (s + l); });
+    const Fields4<R> ball = load_records<R>([&](int l) { return balls + 4 * std::ptrdiff_t{s + l}; });
     const R xs = ball.a, ys = ball.b, zs = ball.c, r = ball.d;
     const R side_limit = cavity_.radius_m() - r;
     const unsigned touching[3] = {lane_bits(xs * xs + ys * ys > side_limit * side_limit), lane_bits(zs - bottom_z < r),

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -39,7 +40,7 @@ std::string describe_exit(int status) {
 struct Worker {
   pid_t pid = -1;
   int point = 0;
-  int fds[2] = {-1, -1};  ///< its stdout (progress lines) and stderr (messages)
+  std::array<int, 2> fds{-1, -1};  ///< its stdout (progress lines) and stderr (messages)
   std::string pending[2];
 };
 
@@ -69,6 +70,7 @@ class WorkerPool {
       args.push_back(a);
     }
     std::vector<char*> argv;
+    argv.reserve(args.size() + 1);
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
 

@@ -9,6 +9,7 @@
 #include <thread>
 #include <tuple>
 
+#include "pdamp/store/process_lease.hpp"
 #include "pdamp/store/run_store.hpp"
 #include "study_compare.hpp"
 #include "test_process.hpp"
@@ -252,9 +253,30 @@ TEST_CASE("a study killed mid-run continues its points in progress from their ch
             .out.find(") is gone; 'pdamp study resume 1' runs it again") != std::string::npos);
 
   const std::string checkpointed = test::unfinished_checkpointed_run_ids(killed);
-  const Result resumed = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
+  // As if those processes had run on another host (a store copied from a node that went
+  // down): their leases cannot be checked from here, so their points are left alone until
+  // the user says that host runs them no more.
+  const std::int64_t elsewhere = count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'running'");
+  sqlite::Database(killed).exec("UPDATE study_points SET lease_host = 'node-gone' WHERE status = 'running'");
+  CHECK(pdamp_cli({"study", "show", "1", "--db", killed.string()}, dir)
+            .out.find("cannot be checked from here; if it runs there no more, 'pdamp study resume 1 --take-over "
+                      "node-gone' runs it again") != std::string::npos);
+  const Result left = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2"}, dir);
+  CHECK(left.code == 1);
+  CHECK(left.err.find("on node-gone (which cannot be checked from here; if it runs there no more: --take-over "
+                      "node-gone)") != std::string::npos);
+  CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") == 6 - elsewhere);
+  for (const std::string& host : {std::string(), this_host_name()}) {
+    const Result refused = pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--take-over", host}, dir);
+    CHECK(refused.code == 2);
+    CHECK(refused.err.find("--take-over") != std::string::npos);
+  }
+  const Result resumed =
+      pdamp_cli({"study", "resume", "1", "--db", killed.string(), "--jobs", "2", "--take-over", "node-gone"}, dir);
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
+  CHECK(resumed.err.find(": taken over from process ") != std::string::npos);
+  CHECK(resumed.err.find(" on node-gone (--take-over node-gone); run again") != std::string::npos);
   CHECK(count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'") == 6);
   // Completed points were not run again; the others continued their runs from their
   // checkpoints (a run without one starts over, the old one left interrupted).

@@ -36,12 +36,13 @@ constexpr const char* study_usage =
     "\n"
     "commands:\n"
     "  run STUDY.ini [--jobs N] [--threads N] [--snapshots EVERY_S [--snapshot-dir DIR]] [--checkpoint-every S]\n"
-    "          [--force] [--db FILE]\n"
+    "          [--take-over HOST] [--force] [--db FILE]\n"
     "          validate every point, store the study, run its points N at a time; running an\n"
     "          unchanged study again resumes it (completed points are kept)\n"
     "  resume STUDY_ID [--jobs N] [--threads N] [--snapshots EVERY_S [--snapshot-dir DIR]] [--checkpoint-every S]\n"
-    "          [--db FILE]\n"
-    "          run the points of a stored study that are not completed\n"
+    "          [--take-over HOST] [--db FILE]\n"
+    "          run the points of a stored study that are not completed; --take-over HOST also\n"
+    "          those left running by processes on another host HOST that runs them no more\n"
     "  list [--db FILE]                  the stored studies\n"
     "  show STUDY_ID [--db FILE]         every point of a study: values, status, metrics\n"
     "  plot STUDY_ID [--metric M] [--x KEY] [--out FILE.png] [--db FILE]\n"
@@ -68,9 +69,16 @@ constexpr const char* study_usage =
 /// The point's message and, if its process is gone, how to run it again.
 void point_messages(const StudyPointState& p, std::int64_t id, std::vector<std::string>& messages) {
   if (!p.message.empty()) messages.push_back("point " + std::to_string(p.point) + ": " + p.message);
-  if (p.lease && !lease_is_alive(*p.lease)) {
-    messages.push_back("point " + std::to_string(p.point) + ": its process (" + std::to_string(p.lease->pid) + " on " +
-                       p.lease->host + ") is gone; 'pdamp study resume " + std::to_string(id) + "' runs it again");
+  if (!p.lease) return;
+  const std::string process = std::to_string(p.lease->pid) + " on " + p.lease->host;
+  const std::string resume = "'pdamp study resume " + std::to_string(id);
+  if (!lease_is_alive(*p.lease)) {
+    messages.push_back("point " + std::to_string(p.point) + ": its process (" + process + ") is gone; " + resume +
+                       "' runs it again");
+  } else if (p.lease->host != this_host_name()) {
+    messages.push_back("point " + std::to_string(p.point) + ": its process (" + process +
+                       ") cannot be checked from here; if it runs there no more, " + resume + " --take-over " +
+                       p.lease->host + "' runs it again");
   }
 }
 
@@ -237,7 +245,9 @@ void add_run_options(Subcommand& command) {
                         "points run at once, each in its own process")(
       "threads", po::value<std::string>(),
       "soft-engine threads per point (default: the cores shared among the jobs); results are the same bits for any "
-      "number");
+      "number")("take-over", po::value<std::string>(),
+                "HOST: points left running by processes on another host HOST (which cannot be checked from here) are "
+                "run again; say it only when no process there runs the study any more");
   command.add(snapshot_options());
   command.add(checkpoint_option());
 }
@@ -258,6 +268,17 @@ StudyRunOptions runner_options(const po::variables_map& vm) {
                                      std::filesystem::absolute(snapshots->directory).string()});
   }
   options.stop = stop_flag();
+  if (vm.count("take-over")) {
+    options.take_over_host = vm["take-over"].as<std::string>();
+    if (options.take_over_host.empty()) {
+      throw InputError("--take-over '': give the host whose processes ran the points (as 'pdamp study show' names it)");
+    }
+    if (options.take_over_host == this_host_name()) {
+      throw InputError("--take-over " + printable(options.take_over_host) +
+                       ": that is this host, whose processes are checked: its points whose process is gone are run "
+                       "again without it, and a live one's are not taken over");
+    }
+  }
   return options;
 }
 

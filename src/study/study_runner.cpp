@@ -186,30 +186,49 @@ class WorkerPool {
   std::vector<Worker> workers_;
 };
 
-/// Points left running by processes that are gone are interrupted (and run again).
-void reclaim_abandoned(StudyStore& studies, std::int64_t study_id) {
+/// Points left running by processes that are gone, or on the host taken over, are
+/// interrupted (and run again); each is reported.
+void reclaim_abandoned(StudyStore& studies, std::int64_t study_id, const StudyRunOptions& options) {
   for (const auto& p : studies.points(study_id)) {
-    if (p.status != PointStatus::running || !p.lease || lease_is_alive(*p.lease)) continue;
-    studies.abandon_point(
-        study_id, p.point, *p.lease, PointStatus::interrupted,
-        "its process (" + std::to_string(p.lease->pid) + " on " + p.lease->host + ") ended before the point did");
+    if (p.status != PointStatus::running || !p.lease) continue;
+    const std::string process = std::to_string(p.lease->pid) + " on " + p.lease->host;
+    std::string why;
+    if (!options.take_over_host.empty() && p.lease->host == options.take_over_host) {
+      why = "taken over from process " + process + " (--take-over " + options.take_over_host + ")";
+    } else if (!lease_is_alive(*p.lease)) {
+      why = "its process (" + process + ") ended before the point did";
+    } else {
+      continue;
+    }
+    if (studies.abandon_point(study_id, p.point, *p.lease, PointStatus::interrupted, why) && options.events.message) {
+      options.events.message("pdamp: point " + std::to_string(p.point) + ": " + why + "; run again");
+    }
   }
+}
+
+/// A point another process runs, and where the lease is another host's, how to take it over.
+std::string running_elsewhere(const StudyPointState& p) {
+  if (!p.lease) return "point " + std::to_string(p.point) + " is running in another process";
+  std::string text = "point " + std::to_string(p.point) + " is running in process " + std::to_string(p.lease->pid) +
+                     " on " + p.lease->host;
+  if (p.lease->host != this_host_name()) {
+    text += " (which cannot be checked from here; if it runs there no more: --take-over " + p.lease->host + ")";
+  }
+  return text;
 }
 
 class StudyRun {
  public:
   StudyRun(RunStore& store, std::int64_t study_id, const StudyRunOptions& options)
       : studies_(store), study_id_(study_id), options_(&options), previous_(studies_.previous_points(study_id)) {
-    reclaim_abandoned(studies_, study_id);
+    reclaim_abandoned(studies_, study_id, options);
     int done = 0;
     for (const auto& p : studies_.points(study_id)) {
       if (p.status == PointStatus::completed) {
         completed_.insert(p.point);
         ++done;
       } else if (p.status == PointStatus::running) {
-        report_.problems.push_back("point " + std::to_string(p.point) + " is running in " +
-                                   (p.lease ? "process " + std::to_string(p.lease->pid) + " on " + p.lease->host
-                                            : std::string("another process")));
+        report_.problems.push_back(running_elsewhere(p));
         ++report_.elsewhere;
       } else {
         queue_.push_back(p.point);

@@ -46,6 +46,10 @@ struct StudyRunOptions {
   std::filesystem::path db;
   WorkerCommand worker;
   const std::atomic<bool>* stop = nullptr;  ///< true: the workers are told to stop, and no point starts
+  /// Another host whose processes the user says run none of the study's points any more:
+  /// points left running under its leases (which cannot be checked from here) are
+  /// interrupted and run again. Empty: none.
+  std::string take_over_host;
   StudyEvents events;
 };
 

@@ -52,7 +52,7 @@ std::vector<Eigen::Vector3d> fcc_sites_nearest_origin(int count, double r) {
       for (int z = -3; z <= 3; ++z) {
         for (const Eigen::Vector3d& o : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.5, 0.5, 0),
                                          Eigen::Vector3d(0.5, 0, 0.5), Eigen::Vector3d(0, 0.5, 0.5)}) {
-          sites.push_back(edge * (Eigen::Vector3d(x, y, z) + o));
+          sites.emplace_back(edge * (Eigen::Vector3d(x, y, z) + o));
         }
       }
     }
@@ -413,7 +413,7 @@ TEST_CASE("jam: a cluster driven against the side wall sticks to the host instea
       "[hard_wall]\nen = 0.3\nmu = 0.55\nbeta0 = 0.35\n");
   std::vector<Eigen::Vector3d> sites = fcc_sites_nearest_origin(54, jam_radius_m);
   const double edge = 2.0 * jam_radius_m * std::sqrt(2.0);
-  sites.push_back(Eigen::Vector3d(-2.0 * edge, 0, 0));  // the heavy sphere, 0.5 mm from the cluster
+  sites.emplace_back(-2.0 * edge, 0, 0);  // the heavy sphere, 0.5 mm from the cluster
   // The sphere at (edge, 0, 0) touches the side wall (1 nm apart).
   const Eigen::Vector3d offset(0.006 - jam_radius_m - edge - 1e-9, 0, 0.006);
   Particles p = jammable_cluster(sites, offset);

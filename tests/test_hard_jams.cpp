@@ -207,8 +207,9 @@ struct DrivenLine {
         "[particles]\ncount = " +
         std::to_string(count + 1) + "\ndiameter_m = 0.001\n[hard]\nen = " + std::to_string(en) + "\nmu = 0\n");
     std::vector<Eigen::Vector3d> positions, velocities;
+    const int middle = count / 2;  // at x = 0
     for (int k = 0; k <= count; ++k) {
-      positions.emplace_back(sigma_m * (k - count / 2), 0, 0.015625);
+      positions.emplace_back(sigma_m * (k - middle), 0, 0.015625);
       velocities.emplace_back(k == 0 ? 1.0 : 0.0, 0, 0);
     }
     initial = spheres(positions, velocities);

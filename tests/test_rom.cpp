@@ -47,6 +47,7 @@ DamperTable gamma_table_of(const std::vector<double>& gammas, const std::vector<
 
 std::vector<double> geometric(double first, double last, int n) {
   std::vector<double> v;
+  v.reserve(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) v.push_back(first * std::pow(last / first, static_cast<double>(i) / (n - 1)));
   return v;
 }

@@ -137,10 +137,10 @@ TEST_CASE("the job script: one array task per point, from 0, throttled, with the
        {"#SBATCH --job-name=pdamp-study-7\n", "#SBATCH --array=0-4%4\n", "#SBATCH --ntasks=1\n",
         "#SBATCH --cpus-per-task=2\n", "#SBATCH --output=/data/runs.sqlite.shards/study-7/logs/%A_%a.log\n",
         "#SBATCH --partition=short\n", "#SBATCH --account=lab\n", "#SBATCH --time=1:00:00\n",
-        "\nexec '/opt/pdamp'\\''s build/pdamp' study task '/data/runs.sqlite.shards/study-7' --job "
-        "\"$SLURM_ARRAY_JOB_ID\" --task \"$SLURM_ARRAY_TASK_ID\" --points 1-3,5,9 --threads "
-        "\"${SLURM_CPUS_PER_TASK:-1}\" --checkpoint-every '60' "
-        "--scratch \"$TMPDIR\"\n"}) {
+        ("\nexec '/opt/pdamp'\\''s build/pdamp' study task '/data/runs.sqlite.shards/study-7' --job "
+         "\"$SLURM_ARRAY_JOB_ID\" --task \"$SLURM_ARRAY_TASK_ID\" --points 1-3,5,9 --threads "
+         "\"${SLURM_CPUS_PER_TASK:-1}\" --checkpoint-every '60' "
+         "--scratch \"$TMPDIR\"\n")}) {
     CAPTURE(line);
     CHECK(contains(script, line));
   }

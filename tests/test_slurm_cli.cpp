@@ -117,7 +117,7 @@ std::string array_line(const std::filesystem::path& script) {
 
 /// A study of small.ini's two models from one bed each point: four host dampings.
 std::filesystem::path four_points(const TempDir& dir) {
-  const auto file = dir / "four.ini";
+  auto file = dir / "four.ini";
   write(file, "[study]\nname = four\nscenario = " + scenario_file("small").string() +
                   "\nmodels = both\n[sweep]\nhost.damping_N_s_m = 0.1:0.4:4\nrun.duration_s = 0.1\n");
   return file;

@@ -251,7 +251,7 @@ TEST_CASE("a run's writer holds no lock while the engine computes, and writes in
 TEST_CASE("a write waits for another connection's transaction, and past the limit fails saying why") {
   test::TempDir dir("store-busy");
   const auto file = dir / "runs.sqlite";
-  RunStore{file};
+  { const RunStore created(file); }
   sqlite::Database holder(file);
   holder.exec("BEGIN IMMEDIATE");
   StoreOptions patient_briefly;
@@ -294,10 +294,11 @@ TEST_CASE("a run whose results cannot be stored ends failed and says why") {
 TEST_CASE("threads, each with its own connection, write runs into one store while another thread reads") {
   test::TempDir dir("store-threads");
   const auto file = dir / "runs.sqlite";
-  RunStore{file};
+  { const RunStore created(file); }
   constexpr int threads = 8, samples = 300, cycles = 6;
   std::atomic<int> failures{0}, writing{threads};
   std::vector<std::thread> writers;
+  writers.reserve(threads);
   for (int t = 0; t < threads; ++t) {
     writers.emplace_back([&] {
       try {
@@ -359,11 +360,11 @@ TEST_CASE("a file is examined before anything is written to it") {
   }
   SUBCASE("an empty file is a store only for writing") {
     const auto file = dir / "empty.sqlite";
-    std::ofstream{file};
+    { std::ofstream created(file); }
     CHECK_THROWS_WITH_AS(RunStore(file, StoreAccess::read), doctest::Contains("is empty"), InputError);
     CHECK_THROWS_WITH_AS(RunStore(file, StoreAccess::modify), doctest::Contains("is empty"), InputError);
     CHECK(std::filesystem::file_size(file) == 0);
-    RunStore{file};
+    { const RunStore created(file); }
     CHECK(RunStore(file, StoreAccess::read).list_runs().empty());
   }
   SUBCASE("a missing file is not created for reading") {

@@ -38,7 +38,7 @@ void store_placed_bed(const std::filesystem::path& db) {
 /// does, until stopped.
 class Reader {
  public:
-  explicit Reader(std::filesystem::path db) : thread_([this, db] { loop(db); }) {}
+  explicit Reader(const std::filesystem::path& db) : thread_([this, db] { loop(db); }) {}
   ~Reader() { stop(); }
   /// Stops reading; then queries() and errors() say how it went.
   void stop() {
@@ -108,8 +108,9 @@ void run_trial(const test::TempDir& dir, const std::filesystem::path& db, double
   const std::string mine = " run_id > " + std::to_string(before);
   CHECK(scalar(d, "SELECT count(*) FROM runs WHERE" + mine) == writers);
   CHECK(scalar(d, "SELECT count(*) FROM runs WHERE status = 'completed' AND" + mine) == writers);
-  for (const auto& [model, duration] :
+  for (const auto& [name, duration] :
        {std::pair{std::string("soft"), soft_s}, std::pair{std::string("hard"), hard_s}}) {
+    const std::string& model = name;  // by name: clang before 16 cannot capture a structured binding
     CAPTURE(model);
     const std::string of_model = " FROM run_summary WHERE model = '" + model + "' AND" + mine;
     const auto samples = std::llround(duration / sample_interval_s) + 1;
@@ -144,7 +145,7 @@ TEST_CASE("eight processes settle and run full Table 1 into one new store: three
           doctest::test_suite("slow")) {
   test::TempDir dir("concurrent-runs-full");
   const auto db = dir / "runs.sqlite";
-  RunStore{db};  // the schema, without a bed: every process settles it in the first trial
+  { const RunStore created(db); }  // the schema, without a bed: every process settles it in the first trial
   for (int trial = 0; trial < 3; ++trial) {
     CAPTURE(trial);
     run_trial(dir, db, 0.2, 1.5);

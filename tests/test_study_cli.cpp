@@ -204,7 +204,7 @@ namespace {
 /// 0.25 s of wall time, so the tests below see one under way (at 0.25 s of simulated time a
 /// point ran in about 0.4 s and was often seen only completed).
 std::filesystem::path six_points(const test::TempDir& dir) {
-  const auto file = dir / "six.ini";
+  auto file = dir / "six.ini";
   write_file(file, study_text("soft", "host.damping_N_s_m = 0.1:0.6:6\nrun.duration_s = 0.6\n"));
   return file;
 }

@@ -40,8 +40,8 @@ std::string describe_exit(int status) {
 struct Worker {
   pid_t pid = -1;
   int point = 0;
-  std::array<int, 2> fds{-1, -1};  ///< its stdout (progress lines) and stderr (messages)
-  std::string pending[2];
+  std::array<int, 2> fds{-1, -1};      ///< its stdout (progress lines) and stderr (messages)
+  std::array<std::string, 2> pending;  ///< what each has said since its last full line
 };
 
 class WorkerPool {

@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """The reduced model against the full simulation (docs/characterisation.md): for each force
-level of a stored [frf] study, the ROM's prediction (pdamp rom --study, from a stored
-characterisation) for the same host over the same frequencies, overlaid in one figure, and
-per level the resonance frequency and the peak amplitude of both with their errors.
+level of a stored [frf] study, the ROM's prediction (pdamp rom, from a stored
+characterisation or a table file) for the same host over the same frequencies, overlaid in
+one figure, and per level the resonance frequency and the peak amplitude of both with their
+errors.
 
 The full simulation's peak is the vertex of the parabola through its highest point and its
 two neighbours (the grid's step would otherwise bound the frequency's resolution); the ROM's
@@ -11,6 +12,8 @@ ROM's sweep_up or sweep_down branch), on a grid ten times finer.
 
 usage: tools/compare_rom_frf.py --frf-db FRF.sqlite --frf-study ID (--char-db CHAR.sqlite --char-study ID | --table FILE)
                                 [--pdamp build/ci/src/pdamp] [--out FILE.png] [--model hard]
+       tools/compare_rom_frf.py --case FRF.sqlite ID TABLE [--case ...] [--pdamp ...] [--out FILE.png] [--model hard]
+           one panel per case (an [frf] study and the table file to predict it with), two a row
 """
 import argparse
 import csv
@@ -67,12 +70,10 @@ def parabola_peak(points):
     return vertex, c - b * b / (4 * a)
 
 
-def rom_curve(args, host, level, f_start, f_stop, count):
-    """Rows of pdamp rom's prediction (CSV) for a force level."""
+def rom_curve(pdamp, table, host, level, f_start, f_stop, count):
+    """Rows of pdamp rom's prediction (CSV) for a force level; `table`: pdamp rom's options naming it."""
     mass, stiffness, damping = host
-    table = ["--table", args.table] if args.table else ["--study", str(args.char_study), "--db", args.char_db,
-                                                        "--model", args.model]
-    command = [args.pdamp, "rom"] + table + [
+    command = [pdamp, "rom"] + table + [
                "--mass", repr(mass), "--stiffness", repr(stiffness), "--damping", repr(damping), "--force",
                repr(level), "--freq", f"{f_start!r}:{f_stop!r}:{count}", "--quiet"]
     with tempfile.TemporaryDirectory() as folder:
@@ -85,32 +86,20 @@ def rom_curve(args, host, level, f_start, f_stop, count):
     return list(csv.DictReader(io.StringIO("".join(lines))))
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--frf-db", required=True)
-    parser.add_argument("--frf-study", type=int, required=True)
-    parser.add_argument("--char-db")
-    parser.add_argument("--char-study", type=int)
-    parser.add_argument("--table", help="a damper table file instead of a stored characterisation")
-    parser.add_argument("--model", default="hard")
-    parser.add_argument("--pdamp", default="build/ci/src/pdamp")
-    parser.add_argument("--out")
-    args = parser.parse_args()
-    if bool(args.table) == bool(args.char_db and args.char_study):
-        fail(PROGRAM, "give --char-db and --char-study (a stored characterisation), or --table FILE")
-    plt = pyplot(PROGRAM)
-    db = sqlite3.connect(f"file:{args.frf_db}?mode=ro", uri=True)
-    host = host_of(db, args.frf_study)
-    curves = frf_curves(db, args.frf_study, args.model)
+def draw_case(ax, case, pdamp, model):
+    """One study against its ROM in `ax`; prints the per-level table."""
+    db = sqlite3.connect(f"file:{case['frf_db']}?mode=ro", uri=True)
+    host = host_of(db, case["study"])
+    curves = frf_curves(db, case["study"], model)
     if not curves:
-        fail(PROGRAM, f"study {args.frf_study} has no completed curve of the {args.model} model under a force", 1)
-
-    fig, ax = plt.subplots(figsize=(9, 6))
+        fail(PROGRAM, f"study {case['study']} of {case['frf_db']} has no completed curve of the {model} model "
+             "under a force", 1)
+    print(f"{case['frf_db']}, study {case['study']}; ROM: {case['source']}")
     print("level_N  sweep  f_res_full_Hz  f_res_rom_Hz  f_error  peak_full  peak_rom  peak_error  full_unsettled")
     levels = sorted({level for level, _ in curves})
     for (level, direction), points in sorted(curves.items(), key=lambda c: (c[0][0], c[0][1] != "up")):
         f_start, f_stop = points[0][0], points[-1][0]
-        rows = rom_curve(args, host, level, f_start, f_stop, 10 * (len(points) - 1) + 1)
+        rows = rom_curve(pdamp, case["table"], host, level, f_start, f_stop, 10 * (len(points) - 1) + 1)
         branch = [(float(r["frequency_hz"]), float(r["response_ratio"])) for r in rows
                   if r[f"sweep_{direction}"] == "1"]
         solutions = [(float(r["frequency_hz"]), float(r["response_ratio"]), r["stability"]) for r in rows
@@ -139,12 +128,50 @@ def main():
     ax.plot([], [], linestyle="none", marker="o", markerfacecolor="none", markeredgecolor="red", label="not settled")
     ax.set_xlabel("frequency (Hz)")
     ax.set_ylabel("|X| / (F0/K)")
-    source = args.table or f"characterisation {args.char_study}"
-    ax.set_title(f"ROM ({source}) against the full simulation (FRF study {args.frf_study}), "
+    ax.set_title(f"ROM ({case['source']}) against the full simulation (FRF study {case['study']}),\n"
                  f"M = {host[0]:g} kg, K = {host[1]:g} N/m, C = {host[2]:g} N s/m", fontsize="small")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize="small")
-    save(fig, args.out, args.frf_study)
+    ax.legend(fontsize="x-small")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--frf-db")
+    parser.add_argument("--frf-study", type=int)
+    parser.add_argument("--char-db")
+    parser.add_argument("--char-study", type=int)
+    parser.add_argument("--table", help="a damper table file instead of a stored characterisation")
+    parser.add_argument("--case", nargs=3, action="append", metavar=("FRF_DB", "FRF_STUDY", "TABLE"),
+                        help="an [frf] study and the table file that predicts it: one panel each")
+    parser.add_argument("--model", default="hard")
+    parser.add_argument("--pdamp", default="build/ci/src/pdamp")
+    parser.add_argument("--out")
+    args = parser.parse_args()
+    cases = []
+    for frf_db, study, table in args.case or []:
+        if not study.isdigit():
+            fail(PROGRAM, f"--case {frf_db} {study} {table}: the study id '{study}' is not a whole number")
+        cases.append({"frf_db": frf_db, "study": int(study), "table": ["--table", table], "source": table})
+    if args.frf_db or args.frf_study is not None:
+        if not (args.frf_db and args.frf_study is not None):
+            fail(PROGRAM, "give --frf-db and --frf-study together")
+        if bool(args.table) == bool(args.char_db and args.char_study):
+            fail(PROGRAM, "give --char-db and --char-study (a stored characterisation), or --table FILE")
+        table = ["--table", args.table] if args.table else ["--study", str(args.char_study), "--db", args.char_db,
+                                                            "--model", args.model]
+        cases.insert(0, {"frf_db": args.frf_db, "study": args.frf_study, "table": table,
+                         "source": args.table or f"characterisation {args.char_study}"})
+    if not cases:
+        fail(PROGRAM, "give --frf-db and --frf-study with a table, or one --case or more")
+    plt = pyplot(PROGRAM)
+    columns = min(2, len(cases))
+    rows = (len(cases) + columns - 1) // columns
+    fig, axes = plt.subplots(rows, columns, figsize=(9 * columns, 6 * rows), squeeze=False)
+    for ax, case in zip(axes.flat, cases):
+        draw_case(ax, case, args.pdamp, args.model)
+    for ax in list(axes.flat)[len(cases):]:
+        ax.set_visible(False)
+    save(fig, args.out, cases[0]["study"])
 
 
 if __name__ == "__main__":

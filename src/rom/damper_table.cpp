@@ -50,8 +50,6 @@ void check_point(const DamperTable& table, std::size_t i, std::size_t j, const s
 
 }  // namespace
 
-std::string to_string(RowAxis axis) { return axis == RowAxis::gamma ? "gamma" : "amplitude"; }
-
 std::string describe_point(const DamperTable& table, std::size_t i, std::size_t j) {
   return (table.row_axis == RowAxis::gamma ? "Gamma = " + number(table.rows[i])
                                            : "A = " + number(table.rows[i]) + " m") +

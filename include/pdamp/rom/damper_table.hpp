@@ -67,8 +67,6 @@ struct DamperTable {
   bool operator==(const DamperTable&) const = default;
 };
 
-std::string to_string(RowAxis axis);  ///< "amplitude" or "gamma", as files name it
-
 /// "A = 0.001 m, f = 20 Hz" or "Gamma = 2, f = 20 Hz": a grid point for messages.
 std::string describe_point(const DamperTable& table, std::size_t row_index, std::size_t frequency_index);
 

@@ -239,8 +239,9 @@ class StudyStore {
                                            double kinetic_J);
   /// Ends the point's attempt as failed or interrupted with a message.
   void end_point(std::int64_t study_id, int point, int attempt, PointStatus status, const std::string& message);
-  /// A point still running under `lease`, whose process is gone, ends as `status` (failed
-  /// or interrupted) with a message, and so do its attempt's runs that were left running.
+  /// A point still running under `lease`, whose process is gone (or, on another host, is
+  /// taken over on the user's word), ends as `status` (failed or interrupted) with a
+  /// message, and so do its attempt's runs that were left running.
   /// False if the point has moved on.
   bool abandon_point(std::int64_t study_id, int point, const ProcessLease& lease, PointStatus status,
                      const std::string& message);

@@ -90,6 +90,7 @@ TEST_CASE("[characterise] mistakes: one message naming the line, the key and wha
   const std::string ok = "[characterise]\nfrequencies = 10, 20\n";
   for (const auto& bad : std::vector<std::pair<std::string, std::string>>{
            {ok + "amplitudes = 0.001\n", "amplitudes has 1 value: a characterisation needs two or more on each axis"},
+           {ok + "gammas = 28\n", "gammas has 1 value: a characterisation needs two or more on each axis (an axis"},
            {"[characterise]\namplitudes = 0.001, 0.002\nfrequencies = 10\n",
             "frequencies has 1 value: a characterisation needs two or more"},
            {ok + "amplitudes = -0.001, 0.002\n", "'-0.001': each amplitude (m, of the container's motion"},

@@ -204,6 +204,39 @@ TEST_CASE("riders: the bed's release is predicted when the floor's acceleration 
   CHECK(releases[0].t_s == doctest::Approx(std::numbers::pi / 6 / w).epsilon(1e-9));
 }
 
+TEST_CASE("riders: a rider's departure re-predicts the spheres near it, and on a prescribed host no others") {
+  // Rider 0 on the floor, sphere 1 touching it from above, sphere 2 touching the floor far
+  // from both. When the rider leaves, sphere 1's exact prediction (which may be a collision
+  // with it) must be redone. A free host's restart redoes every touching sphere's as well;
+  // a prescribed host moves on as before, so sphere 2's prediction stands.
+  for (const bool prescribed : {true, false}) {
+    CAPTURE(prescribed);
+    const Scenario s = prescribed ? test::scenario_from(
+                                        "[excitation]\nmode = prescribed\namplitude_m = 0.0001\nfrequency_hz = 30\n"
+                                        "[cavity]\ndiameter_m = 0.02\nheight_m = 0.01\n[particles]\ncount = 3\n"
+                                        "diameter_m = 0.001\n")
+                                  : free_host(3);
+    const double touching_gap = 1e-5 * r_m;
+    Parts parts(s, test::spheres({Eigen::Vector3d(0.003, 0, r_m), Eigen::Vector3d(0.003, 0, 3 * r_m + touching_gap),
+                                  Eigen::Vector3d(-0.006, 0, r_m + touching_gap)},
+                                 {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, r_m));
+    REQUIRE(parts.host.restart(parts.host.attach(0, 1, 0.0).host_after, 0.0));
+    parts.host.enter_near(1, 0.0);
+    parts.host.enter_near(2, 0.0);
+    REQUIRE(parts.host.tier_of(1) == 3);
+    REQUIRE(parts.host.tier_of(2) == 3);
+    const std::uint32_t near_stamp = parts.flight.sphere(1).host_stamp;
+    const std::uint32_t far_stamp = parts.flight.sphere(2).host_stamp;
+    const double t = 1e-4;
+    const HostState host = parts.host.trajectory().at(t);
+    parts.host.detach(0, host, t);
+    REQUIRE(parts.host.restart(host, t));
+    CHECK(parts.flight.sphere(1).host_stamp != near_stamp);
+    CHECK((parts.flight.sphere(2).host_stamp != far_stamp) == !prescribed);
+    if (prescribed) CHECK(parts.ledger.counts.touching_repredictions == 0);
+  }
+}
+
 TEST_CASE("books: the host's damping and excitation booked in stretches add up to one booking of the whole") {
   const Scenario s = test::scenario_from(
       "[host]\nmass_kg = 0.02\nstiffness_N_m = 900\ndamping_N_s_m = 0.3\nz0_m = 0.002\nv0_m_s = 0\n"

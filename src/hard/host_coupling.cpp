@@ -52,20 +52,27 @@ bool HostCoupling::restart(HostState start, double t_s) {
   trajectory_ = HostTrajectory(model_, t_s, start, riding_mass_kg_, riding_mass_kg_ * gravity_m_s2_.z());
   trajectory_riding_mass_kg_ = riding_mass_kg_;
   ++epoch_;
+  if (prescribed()) {
+    // The motion is a function of time alone: the touching spheres' predictions stand,
+    // but for their collisions with the riders that left.
+    for (const Eigen::Vector3d& departed : departed_m_) repredict_near_around(departed, t_s);
+    departed_m_.clear();
+    predict_bed_release(t_s);
+    return true;
+  }
+  departed_m_.clear();
   if (trajectory_.speed_bound_m_s() > speed_envelope_m_s_) {
     speed_envelope_m_s_ = 2.0 * trajectory_.speed_bound_m_s();
     return false;
   }
-  if (!prescribed()) {
-    // The new trajectory minus the old one solves the host's equation with initial
-    // velocity Δv and a force Δm (g_z − z_h''), so within τ it strays by at most
-    // |Δv| τ + ½ Δm (|g_z| + |z_h''|max) / M_new τ².
-    const double acceleration_change =
-        mass_change * (std::abs(gravity_m_s2_.z()) + old_acceleration_bound) / (model_.mass_kg() + riding_mass_kg_);
-    for (MarginTier& tier : tiers_) {
-      const double tau = tier.horizon_s;
-      tier.budget_m += velocity_change * tau + 0.5 * acceleration_change * tau * tau;
-    }
+  // The new trajectory minus the old one solves the host's equation with initial
+  // velocity Δv and a force Δm (g_z − z_h''), so within τ it strays by at most
+  // |Δv| τ + ½ Δm (|g_z| + |z_h''|max) / M_new τ².
+  const double acceleration_change =
+      mass_change * (std::abs(gravity_m_s2_.z()) + old_acceleration_bound) / (model_.mass_kg() + riding_mass_kg_);
+  for (MarginTier& tier : tiers_) {
+    const double tau = tier.horizon_s;
+    tier.budget_m += velocity_change * tau + 0.5 * acceleration_change * tau * tau;
   }
   // The outermost tier whose budget is spent is swept (with every tier inside it);
   // otherwise only the touching spheres need new predictions.
@@ -148,6 +155,7 @@ void HostCoupling::detach(int i, const HostState& host, double t_s) {
   flight_.sphere(i).riding = 0;
   flight_.new_trajectory(i);
   particles.position_m.col(i) += host.z_m * e_z;
+  departed_m_.emplace_back(particles.position_m.col(i));
   particles.velocity_m_s.col(i) = host.v_m_s * e_z;
   particles.t_ref_s[i] = t_s;
   flight_.enter_cell(i, flight_.grid().coord_of(particles.position_m.col(i)));

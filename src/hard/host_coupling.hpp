@@ -116,7 +116,7 @@ class HostCoupling {
   Attached attach(int i, int side, double t_s);
   /// Riding sphere i leaves the bed at t_s with the host's velocity (`host`, now; no
   /// momentum changes hands) and becomes free, without predictions yet; the host must
-  /// then restart with the riding mass that is left.
+  /// then restart with the riding mass that is left (before the next event).
   void detach(int i, const HostState& host, double t_s);
 
   // Host-dependent predictions.
@@ -237,6 +237,9 @@ class HostCoupling {
   int bed_side_ = 0;
   double bed_depth_bound_m_ = 0;  ///< riders never reach farther from their cap than this
   CellMembers rider_cells_;       ///< riding spheres by host-frame cell (the free cells' geometry)
+  /// Where the riders detached since the last restart were (lab frame): a prescribed host's
+  /// restart predicts anew only the spheres near them. Empty between events.
+  std::vector<Eigen::Vector3d> departed_m_;
 
   // The tiers.
   /// Near spheres (host_check fired; margin 0.1 r), within those the imminent ones (within

@@ -271,11 +271,11 @@ class CharacteriseParser : SteadySectionParser {
           positive_values(v, c_.axis == AmplitudeAxis::gamma
                                  ? "each Gamma = A (2 pi f)^2 / g must be > 0"
                                  : "each amplitude (m, of the container's motion A sin 2 pi f t) must be > 0"));
-      at_least_two(c_.amplitudes, "amplitude");
+      at_least_two(c_.amplitudes);
     } else if (entry.key == "empty") {
       c_.empty = flag(v);
     } else if (common_key(entry, c_.frequencies, c_.start, c_.models, c_.criterion)) {
-      if (entry.key == "frequencies") at_least_two(c_.frequencies, "frequency");
+      if (entry.key == "frequencies") at_least_two(c_.frequencies);
       if (c_.start == FrfStart::prediction) {
         fail(
             "= predict: the container's motion is prescribed, there is no host response to predict; use "
@@ -305,10 +305,10 @@ class CharacteriseParser : SteadySectionParser {
  private:
   std::string axis_key() const { return c_.axis == AmplitudeAxis::gamma ? "gammas" : "amplitudes"; }
 
-  void at_least_two(const std::vector<std::string>& values, const std::string& what) const {
+  void at_least_two(const std::vector<std::string>& values) const {
     if (values.size() < 2) {
-      fail("has " + std::to_string(values.size()) + " value: a characterisation needs two or more on each axis (a " +
-           what + " axis of one value cannot be interpolated)");
+      fail("has " + std::to_string(values.size()) +
+           " value: a characterisation needs two or more on each axis (an axis of one value cannot be interpolated)");
     }
   }
 

@@ -584,6 +584,8 @@ TEST_CASE("a start = predict [frf] study killed in a predicted point and resumed
   resume_continuing_checkpoints(killed, dir);
   CHECK(frf_metric_differences(reference, killed) == 0);
   CHECK(frf_metric_differences(killed, reference) == 0);
+  // A completed point keeps its end state, not its run's last checkpoint.
+  CHECK(count_rows(killed, "SELECT count(*) FROM run_checkpoints") == 0);
   const auto [differing, compared] = sample_differences(reference, killed);
   CHECK(compared > 6 * 10);
   CHECK(differing == 0);

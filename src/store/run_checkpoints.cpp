@@ -97,8 +97,9 @@ ResumableRun RunStore::resumable_run(std::int64_t run_id, std::optional<double> 
   require_resumable(run, summary(run_id), until_s);
   auto stored = checkpoint(run_id);
   if (!stored) {
-    throw InputError(name + " has no checkpoint (it stopped before its first, or ran with --checkpoint-every 0): it " +
-                     "cannot be resumed; start a new run");
+    throw InputError(name + " has no checkpoint (it stopped before its first, ran with --checkpoint-every 0, or " +
+                     "is a completed point of a study's curve, which keeps its end state instead): it cannot be " +
+                     "resumed; start a new run");
   }
   if (stored->pdamp_version != version_string || stored->schema_version != schema_version()) {
     throw InputError(name + "'s checkpoint was written by pdamp " + stored->pdamp_version + " (store schema " +

@@ -370,6 +370,10 @@ std::int64_t StudyStore::store_end_and_complete(std::int64_t study_id, int point
     throw RuntimeFailure("study " + std::to_string(study_id) + " point " + std::to_string(point) + " attempt " +
                          std::to_string(attempt) + " is no longer running here; its results are not counted");
   }
+  // The run's last checkpoint (most of a point's bytes) has served: the curve goes on from
+  // the end state just stored, and a completed point is never continued.
+  sqlite::Statement forget(db(), "DELETE FROM run_checkpoints WHERE run_id = ?");
+  forget.bind(1, end.run_id).run();
   return state_id;
 }
 

@@ -228,8 +228,9 @@ class StudyStore {
                       std::optional<std::int64_t> comparison_id);
   /// Completes a frequency-response point's attempt with its metrics and final state: its
   /// spheres (`end_spheres`, of kinetic energy `kinetic_J`) stored as a bed in the same
-  /// transaction, so that a process killed on the way leaves neither; `result.end.state_id`
-  /// is ignored. Returns the bed's state_id.
+  /// transaction, so that a process killed on the way leaves neither; the run's checkpoint,
+  /// whose state the bed now holds, is deleted with it (`pdamp resume --until` does not extend
+  /// a curve's point). `result.end.state_id` is ignored. Returns the bed's state_id.
   std::int64_t complete_frf_point(std::int64_t study_id, int point, int attempt, const FrfPointResult& result,
                                   const Particles& end_spheres, double kinetic_J);
   /// Completes a characterisation point's attempt with its metrics and final state, as
@@ -260,7 +261,7 @@ class StudyStore {
  private:
   void insert_points(std::int64_t study_id, const std::vector<NewStudyPoint>& points);
   /// In a transaction: the point's final state (its spheres as a bed under `label`) and its
-  /// completion. Returns the bed's state_id.
+  /// completion; its run's checkpoint is deleted. Returns the bed's state_id.
   std::int64_t store_end_and_complete(std::int64_t study_id, int point, int attempt, const std::string& label,
                                       const FrfEndState& end, const Particles& end_spheres, double kinetic_J,
                                       double wall_time_s);

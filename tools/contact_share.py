@@ -12,15 +12,9 @@ import os
 import sys
 
 import numpy as np
-import vtk
 from vtk.util.numpy_support import vtk_to_numpy
 
-
-def read(path):
-    reader = vtk.vtkXMLPolyDataReader()
-    reader.SetFileName(path)
-    reader.Update()
-    return reader.GetOutput()
+from render_snapshot import read
 
 
 def frame(spheres_path):

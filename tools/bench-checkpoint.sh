@@ -27,13 +27,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 source "$root/tools/bench-lib.sh"
-if [ -n "${PDAMP_BINARY:-}" ]; then
-  pdamp=$PDAMP_BINARY
-else
-  "$root/tools/build.sh" release >/dev/null
-fi
-db="$root/build/bench/checkpoint.sqlite"
-rm -f "$db"
+pdamp_and_store checkpoint
 table1="$root/data/scenarios/table1.ini"
 pin=(on_bench_core)
 # The shared bed, settled once.
@@ -53,9 +47,6 @@ for round in $(seq "$rounds"); do
 done
 echo
 # Each setting against none of the same round (the machine's speed drifts between rounds).
-median_min_max() {  # of the numbers on stdin
-  sort -g | awk '{ a[NR] = $1 } END { printf "%.4f %.4f %.4f", NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2, a[1], a[NR] }'
-}
 echo "model every_s runs wall_median_s wall_min_s wall_max_s ratio_to_none_median ratio_min ratio_max checkpoint_bytes"
 for model in soft hard; do
   for every in 0 60 1 0.05; do

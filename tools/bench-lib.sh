@@ -49,3 +49,20 @@ shaken_periods_2_to_4() {
     --duration "$(awk -v p="$period" 'BEGIN { printf "%.10f", 4 * p }')")
   echo "$(($(stat "$full" steps) - $(stat "$warmup" steps))) $(awk -v a="$(wall "$full")" -v b="$(wall "$warmup")" 'BEGIN { print a - b }') $(stat "$full" peak_memory_kB)"
 }
+
+# The pdamp to time: PDAMP_BINARY if set, else the release build, built first. Then a
+# fresh store build/bench/$1.sqlite for this benchmark's runs.
+pdamp_and_store() {
+  if [ -n "${PDAMP_BINARY:-}" ]; then
+    pdamp=$PDAMP_BINARY
+  else
+    "$root/tools/build.sh" release >/dev/null
+  fi
+  db="$root/build/bench/$1.sqlite"
+  rm -f "$db"
+}
+
+# "median min max" of the numbers on stdin.
+median_min_max() {
+  sort -g | awk '{ a[NR] = $1 } END { printf "%.4f %.4f %.4f", NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2, a[1], a[NR] }'
+}

@@ -38,13 +38,7 @@ for c in $cases; do
   }
 done
 source "$root/tools/bench-lib.sh"
-if [ -n "${PDAMP_BINARY:-}" ]; then
-  pdamp=$PDAMP_BINARY
-else
-  "$root/tools/build.sh" release >/dev/null
-fi
-db="$root/build/bench/models.sqlite"
-rm -f "$db"
+pdamp_and_store models
 
 # One run of case $1 (NAME:DURATION) on model $2 (soft, hard or hard+ for --hard-set): its run id.
 case_run() {
@@ -78,9 +72,6 @@ done
 echo
 [ -n "$hard_set" ] && echo "hard+: hard with --set $hard_set"
 echo "case model runs wall_median_s wall_min_s wall_max_s soft_over_this_median soft_over_this_min soft_over_this_max dissipation_vs_soft"
-median_min_max() {  # of the numbers on stdin
-  sort -g | awk '{ a[NR] = $1 } END { printf "%.4f %.4f %.4f", NR % 2 ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2, a[1], a[NR] }'
-}
 for c in $cases; do
   name=${c%%:*}
   for model in "${models[@]}"; do

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "pdamp/sim/frf_point.hpp"
+#include "pdamp/sim/initial_bed.hpp"
 #include "pdamp/store/study_store.hpp"
 #include "pdamp/study/point_runner.hpp"
 #include "pdamp/study/study.hpp"
@@ -388,7 +389,7 @@ TEST_CASE("start = predict: a continued point starts on its predicted steady sta
   }
 
   // With a bed: the second point's spheres are the first's final ones moved by the host's
-  // shift, stored as a bed of their own that the run names.
+  // shift, which the run records beside that state instead of a copy of the moved bed.
   const auto db = dir / "bed.sqlite";
   const auto file = dir / "bed.ini";
   write_file(file, frf_study("levels = 0.2\nfrequencies = 16, 18\nmax_cycles = 40\nstart = predict\n"));
@@ -403,11 +404,18 @@ TEST_CASE("start = predict: a continued point starts on its predicted steady sta
       predicted_shift(rows[0].result->metrics, 2 * std::numbers::pi * 16.0, HostModel(point_scenario(s, s.points[1])));
   CHECK(std::abs(shift.z_m) > 0.0);
   const std::int64_t run2 = rows[1].result->run_id;
-  const std::int64_t start2 =
-      count_rows(db, "SELECT initial_state_id FROM runs WHERE run_id = " + std::to_string(run2));
-  CHECK(start2 != end1->state_id);
+  const std::string of_run2 = " FROM runs WHERE run_id = " + std::to_string(run2);
+  CHECK(count_rows(db, "SELECT initial_state_id" + of_run2) == end1->state_id);
+  {
+    sqlite::Database bed_store(db, sqlite::Access::read_only);
+    sqlite::Statement recorded(bed_store, "SELECT bed_shift_z_m, bed_shift_v_m_s" + of_run2);
+    REQUIRE(recorded.step());
+    CHECK(recorded.column_double(0) == shift.z_m);
+    CHECK(recorded.column_double(1) == shift.v_m_s);
+  }
+  CHECK(count_rows(db, "SELECT count(*) FROM initial_states") == 3);  // the settled bed and two end states
   const Particles before = store.load_initial_particles(end1->state_id);
-  const Particles after = store.load_initial_particles(start2);
+  const Particles after = moved_with_host(before, shift);
   REQUIRE(after.size() == before.size());
   for (Eigen::Index i = 0; i < before.size(); ++i) {
     CHECK(after.position_m(0, i) == before.position_m(0, i));
@@ -418,6 +426,11 @@ TEST_CASE("start = predict: a continued point starts on its predicted steady sta
   const Observation first = store.results(run2).samples.front().observation;
   CHECK(first.host.z_m == doctest::Approx(end1->host.z_m + shift.z_m).epsilon(1e-12));
   CHECK(first.host.v_m_s == doctest::Approx(end1->host.v_m_s + shift.v_m_s).epsilon(1e-12));
+  // The run began with the moved spheres, not the stored ones.
+  REQUIRE(std::abs(shift.v_m_s) > 0.0);
+  const double kinetic_J = first.energy.particle_translational_J + first.energy.particle_rotational_J;
+  CHECK(kinetic_J == doctest::Approx(test::kinetic_energy(after)).epsilon(1e-12));
+  CHECK(kinetic_J != doctest::Approx(test::kinetic_energy(before)).epsilon(1e-6));
 }
 
 TEST_CASE("a point's final state and its completion are one transaction: refused, neither is stored") {
@@ -591,12 +604,15 @@ TEST_CASE("a start = predict [frf] study killed in a predicted point and resumed
   CHECK(differing == 0);
   CHECK(cycle_differences(reference, killed).first == 0);
   CHECK(orphan_end_states(killed) == 0);
-  // Each continued point's run started from its predicted bed, one per point.
+  // Each continued point's completed run started from the previous point's end state, moved
+  // by its recorded shift (a run the kill cut short before its first checkpoint stays, the
+  // point ran again): no bed is stored for a start.
   const std::string predicted_starts =
-      "SELECT count(DISTINCT r.initial_state_id) FROM runs r JOIN initial_states i ON i.state_id = r.initial_state_id "
-      "WHERE i.settle_key LIKE 'frequency-response point start: % predicted from run %'";
+      "SELECT count(*) FROM runs r JOIN study_point_states s ON s.state_id = r.initial_state_id "
+      "WHERE r.status = 'completed' AND r.bed_shift_z_m IS NOT NULL AND r.bed_shift_v_m_s IS NOT NULL";
   CHECK(count_rows(killed, predicted_starts) == 4);
   CHECK(count_rows(reference, predicted_starts) == 4);
+  CHECK(count_rows(killed, "SELECT count(*) FROM initial_states") == 1 + 6);  // the settled bed, six end states
 }
 
 TEST_CASE("pdamp study plot draws an [frf] study's response") {

@@ -437,12 +437,10 @@ namespace {
 /// final state, which the folder's study then holds, as it holds point 4's interrupted run;
 /// both curves resubmitted (the second continuing point 4's run from its checkpoint) and
 /// collected. Every metric that `metric_differences` compares, every sample and every run
-/// are the same bits. `predicted_beds`: each continued point's start is
-/// a bed of its own (start = predict).
+/// are the same bits.
 void check_curves_on_shards(
     const test::TempDir& dir, const std::string& sections,
-    const std::function<std::int64_t(const std::filesystem::path&, const std::filesystem::path&)>& metric_differences,
-    bool predicted_beds = false) {
+    const std::function<std::int64_t(const std::filesystem::path&, const std::filesystem::path&)>& metric_differences) {
   const auto file = dir / "curves.ini";
   test::write_file(file, "[study]\nname = curves\nscenario = " + test::small() + "\nmodels = hard\n\n" + sections);
   const study::Study study = study::make_study(study::read_study_source(file), false);
@@ -485,8 +483,8 @@ void check_curves_on_shards(
   REQUIRE(report.merged.size() == 2);
   CHECK(report.merged[0].points == 3);
   CHECK(report.merged[0].runs == 3);
-  // The settled bed and three final states, and points 2 and 3's predicted starts.
-  CHECK(report.merged[0].beds_added == (predicted_beds ? 6 : 4));
+  // The settled bed and three final states (a predicted start is its run's shift of one).
+  CHECK(report.merged[0].beds_added == 4);
   CHECK(report.merged[1].points == 1);
   CHECK(report.merged[1].task.outcome == PointStatus::interrupted);
   const auto status_of = [&](int point) { return studies.point(id, point)->status; };
@@ -570,7 +568,7 @@ TEST_CASE(
   check_curves_on_shards(dir,
                          "[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 20\nlevels = 0.05, 0.2\n"
                          "frequencies = 15, 17, 19\nmax_cycles = 20\nstart = predict\n",
-                         frf_differences, true);
+                         frf_differences);
 }
 
 // A grid of two particle counts: each count's curve is a task of its own.

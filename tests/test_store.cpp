@@ -570,6 +570,22 @@ TEST_CASE("a store of schema 11 is migrated: each run's counters go to the colum
                        " AND collisions IS NULL AND riding_spheres IS NULL") == 1);
 }
 
+TEST_CASE("a store of schema 15 is migrated: its runs started from their beds as stored, without a shift") {
+  test::TempDir dir("store-migrate-15");
+  const auto file = dir / "v15.sqlite";
+  {
+    sqlite::Database v15(file);
+    make_store_of_schema(v15, 15);
+    v15.exec(
+        "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, pdamp_version, status, "
+        "started_at) VALUES ('hard', 'old', '', 1, 0, 0.1, '0.1.0', 'completed', '2026-01-01')");
+  }
+  RunStore store(file);
+  sqlite::Database db(store.file());
+  CHECK(scalar(db, "PRAGMA user_version") == RunStore::schema_version());
+  CHECK(scalar(db, "SELECT count(*) FROM runs WHERE bed_shift_z_m IS NULL AND bed_shift_v_m_s IS NULL") == 1);
+}
+
 TEST_CASE("a store of schema 14 is migrated: its [frf] points have no grid, and study_frf shows the column") {
   test::TempDir dir("store-migrate-14");
   const auto file = dir / "v14.sqlite";

@@ -43,4 +43,12 @@ InitialBed prepare_initial_bed(const Scenario& scenario, RunStore& store, const 
   return {bed.particles, id, false, bed.settle_time_s};
 }
 
+Particles moved_with_host(Particles spheres, const HostState& shift) {
+  for (Eigen::Index i = 0; i < spheres.size(); ++i) {
+    spheres.position_m(2, i) += shift.z_m;
+    spheres.velocity_m_s(2, i) += shift.v_m_s;
+  }
+  return spheres;
+}
+
 }  // namespace pdamp

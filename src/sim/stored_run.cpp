@@ -22,7 +22,7 @@ std::unique_ptr<Engine> start_engine(RunStore& store, std::int64_t run_id, const
   const InitialBed& bed = bed_source();
   auto engine = make_engine(plan.engine, scenario, bed.particles);
   store.start_run(run_id, {engine->time_step_s() > 0 ? std::optional(engine->time_step_s()) : std::nullopt,
-                           bed.state_id, solid_fraction(scenario.cavity, bed.particles)});
+                           bed.state_id, solid_fraction(scenario.cavity, bed.particles), bed.shift});
   if (plan.engine.calibration && bed.particles.size() > 0) store.save_calibration(run_id, *plan.engine.calibration);
   return engine;
 }
@@ -133,7 +133,8 @@ StoredRun resume_and_store(RunStore& store, std::int64_t run_id, std::optional<d
   const Scenario scenario = parse_scenario(run.scenario_text, "resumed",
                                            "run " + std::to_string(run_id) + "'s scenario", overrides, "--until");
   const EngineSetup setup = prepare_engine(model, scenario);
-  const Particles bed = run.initial_state_id ? store.load_initial_particles(*run.initial_state_id) : Particles(0);
+  Particles bed = run.initial_state_id ? store.load_initial_particles(*run.initial_state_id) : Particles(0);
+  if (run.bed_shift) bed = moved_with_host(std::move(bed), *run.bed_shift);
   // Restored before the store is touched: a checkpoint that does not fit changes nothing.
   CheckpointReader checkpoint(run.checkpoint.state);
   const std::optional<RunLoopState> loop = body ? std::nullopt : std::optional(read_run_loop_state(checkpoint));

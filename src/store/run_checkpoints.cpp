@@ -83,7 +83,7 @@ ResumableRun RunStore::resumable_run(std::int64_t run_id, std::optional<double> 
   const std::string name = run_named(run_id);
   sqlite::Statement query(*db_,
                           "SELECT model, scenario_text, status, duration_s, initial_state_id, lease_host, lease_pid, "
-                          "lease_start FROM runs WHERE run_id = ?");
+                          "lease_start, bed_shift_z_m, bed_shift_v_m_s FROM runs WHERE run_id = ?");
   query.bind(1, run_id);
   if (!query.step()) throw InputError(name + " is not in '" + file().string() + "' (see pdamp runs)");
   ResumableRun run;
@@ -94,6 +94,7 @@ ResumableRun RunStore::resumable_run(std::int64_t run_id, std::optional<double> 
   run.duration_s = query.column_double(3);
   if (!query.is_null(4)) run.initial_state_id = query.column_int(4);
   if (!query.is_null(5)) run.lease = ProcessLease{query.column_text(5), query.column_int(6), query.column_int(7)};
+  if (!query.is_null(8)) run.bed_shift = HostState{query.column_double(8), query.column_double(9)};
   require_resumable(run, summary(run_id), until_s);
   auto stored = checkpoint(run_id);
   if (!stored) {

@@ -268,8 +268,15 @@ std::int64_t RunStore::begin_run(const NewRun& run) {
 void RunStore::start_run(std::int64_t run_id, const RunStart& start) {
   sqlite::write_transaction(*db_, [&] {
     sqlite::Statement update(*db_,
-                             "UPDATE runs SET dt_s = ?, initial_state_id = ?, solid_fraction = ? WHERE run_id = ?");
-    update.bind(1, start.dt_s).bind(2, start.initial_state_id).bind(3, start.solid_fraction).bind(4, run_id);
+                             "UPDATE runs SET dt_s = ?, initial_state_id = ?, bed_shift_z_m = ?, bed_shift_v_m_s = ?, "
+                             "solid_fraction = ? WHERE run_id = ?");
+    const auto& shift = start.bed_shift;
+    update.bind(1, start.dt_s)
+        .bind(2, start.initial_state_id)
+        .bind(3, shift ? std::optional(shift->z_m) : std::nullopt)
+        .bind(4, shift ? std::optional(shift->v_m_s) : std::nullopt)
+        .bind(5, start.solid_fraction)
+        .bind(6, run_id);
     update.run();
   });
 }

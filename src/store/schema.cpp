@@ -633,6 +633,13 @@ FROM study_points p JOIN study_frf_points f ON f.study_id = p.study_id AND f.poi
 LEFT JOIN study_frf_metrics m ON m.study_id = p.study_id AND m.point = p.point;
 )sql";
 
+/// A run that starts from a stored bed moved rigidly along the axis (a `start = predict`
+/// point of a frequency response) records the move instead of a copy of the moved bed.
+constexpr std::string_view v16_bed_shift = R"sql(
+ALTER TABLE runs ADD COLUMN bed_shift_z_m REAL;    -- NULL: the bed as stored
+ALTER TABLE runs ADD COLUMN bed_shift_v_m_s REAL;  -- with bed_shift_z_m: every sphere's z and vz moved by these
+)sql";
+
 std::string study_frf_view(std::string_view grid_column) {
   return std::string(study_frf_view_head) + std::string(grid_column) + std::string(study_frf_view_tail);
 }
@@ -642,7 +649,7 @@ std::string study_frf_view(std::string_view grid_column) {
 std::span<const std::string_view> migrations() {
   static const std::string v11 = std::string(v11_frf_studies) + study_frf_view("");
   static const std::string v15 = std::string(v15_frf_grids) + study_frf_view("f.grid, ");
-  static const std::array<std::string_view, 15> all{v1_runs_samples_cycles,
+  static const std::array<std::string_view, 16> all{v1_runs_samples_cycles,
                                                     v2_run_statistics,
                                                     v3_initial_states,
                                                     v4_comparisons,
@@ -656,7 +663,8 @@ std::span<const std::string_view> migrations() {
                                                     v12_engine_counters,
                                                     v13_characterisation,
                                                     v14_comparison_runs,
-                                                    v15};
+                                                    v15,
+                                                    v16_bed_shift};
   return all;
 }
 

@@ -114,21 +114,12 @@ class PointExecution {
     return *bed;
   }
 
-  /// The spheres a continued point starts from: the previous point's final ones, or, moved
-  /// by `shift` (start = predict), those stored as a bed of their own, so that the run
-  /// names the state it started from.
+  /// The spheres a continued point starts from: the previous point's final ones, moved by
+  /// `shift` with the host (start = predict), which the run records beside the state.
   InitialBed continued_bed(const FrfEndState& from, const std::optional<HostState>& shift) {
     Particles spheres = store_->load_initial_particles(from.state_id);
-    if (!shift) return {std::move(spheres), from.state_id, true, from.t_s};
-    for (Eigen::Index i = 0; i < spheres.size(); ++i) {
-      spheres.position_m(2, i) += shift->z_m;
-      spheres.velocity_m_s(2, i) += shift->v_m_s;
-    }
-    const std::int64_t state_id =
-        store_->save_initial_state("frequency-response point start: study " + std::to_string(study_id_) + " point " +
-                                       std::to_string(point_) + " predicted from run " + std::to_string(from.run_id),
-                                   spheres, from.t_s, kinetic_energy_J(spheres), 0.0);
-    return {std::move(spheres), state_id, true, from.t_s};
+    if (shift) spheres = moved_with_host(std::move(spheres), *shift);
+    return {std::move(spheres), from.state_id, true, from.t_s, shift};
   }
 
   /// The control of a run of this point: its stop, checkpoints and `progress`.

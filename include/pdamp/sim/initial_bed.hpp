@@ -21,7 +21,14 @@ struct InitialBed {
   std::optional<std::int64_t> state_id;  ///< in the store; empty for a bed without particles
   bool reused = false;                   ///< taken from the store rather than settled now
   double settle_time_s = 0.0;
+  /// `particles` are state_id's moved rigidly by this (moved_with_host), which the run
+  /// records instead of storing them again.
+  std::optional<HostState> shift{};
 };
+
+/// The spheres moved rigidly with the host by `shift`: z and vz by its z and v; x, y, the
+/// other velocities and the spins as they were.
+Particles moved_with_host(Particles spheres, const HostState& shift);
 
 /// Every setting that determines the settled bed, as text: the cavity, gravity, particle
 /// and soft-contact sections, the host's held position, the time step and the rule.

@@ -42,6 +42,7 @@ struct RunStart {
   std::optional<double> dt_s;                    ///< time step of a time-stepped engine
   std::optional<std::int64_t> initial_state_id;  ///< the settled bed the run started from
   double solid_fraction = 0.0;                   ///< the spheres' volume over the hole's
+  std::optional<HostState> bed_shift{};          ///< that bed moved rigidly by this first (z, vz)
 };
 
 /// One sample of a run as the store keeps it.
@@ -165,6 +166,7 @@ struct ResumableRun {
   std::optional<ProcessLease> lease;          ///< a dead run's
   double duration_s = 0.0;                    ///< the run's end
   std::optional<std::int64_t> initial_state_id;
+  std::optional<HostState> bed_shift{};  ///< RunStart's
   RunCheckpoint checkpoint;
 };
 

@@ -54,6 +54,16 @@ void make_store_of_schema(sqlite::Database& db, int version) {
   db.exec("PRAGMA user_version = " + std::to_string(version));
 }
 
+/// A store file of schema `version` in `dir` with the rows `old_rows` insert, as that
+/// pdamp wrote them.
+std::filesystem::path store_of_schema(const test::TempDir& dir, int version, const std::vector<std::string>& old_rows) {
+  const auto file = dir / ("v" + std::to_string(version) + ".sqlite");
+  sqlite::Database db(file);
+  make_store_of_schema(db, version);
+  for (const std::string& row : old_rows) db.exec(row);
+  return file;
+}
+
 std::string file_bytes(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::ostringstream bytes;
@@ -572,15 +582,10 @@ TEST_CASE("a store of schema 11 is migrated: each run's counters go to the colum
 
 TEST_CASE("a store of schema 15 is migrated: its runs started from their beds as stored, without a shift") {
   test::TempDir dir("store-migrate-15");
-  const auto file = dir / "v15.sqlite";
-  {
-    sqlite::Database v15(file);
-    make_store_of_schema(v15, 15);
-    v15.exec(
-        "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, pdamp_version, status, "
-        "started_at) VALUES ('hard', 'old', '', 1, 0, 0.1, '0.1.0', 'completed', '2026-01-01')");
-  }
-  RunStore store(file);
+  RunStore store(store_of_schema(
+      dir, 15,
+      {"INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, pdamp_version, status, "
+       "started_at) VALUES ('hard', 'old', '', 1, 0, 0.1, '0.1.0', 'completed', '2026-01-01')"}));
   sqlite::Database db(store.file());
   CHECK(scalar(db, "PRAGMA user_version") == RunStore::schema_version());
   CHECK(scalar(db, "SELECT count(*) FROM runs WHERE bed_shift_z_m IS NULL AND bed_shift_v_m_s IS NULL") == 1);
@@ -588,17 +593,16 @@ TEST_CASE("a store of schema 15 is migrated: its runs started from their beds as
 
 TEST_CASE("a store of schema 14 is migrated: its [frf] points have no grid, and study_frf shows the column") {
   test::TempDir dir("store-migrate-14");
-  const auto file = dir / "v14.sqlite";
+  const auto file =
+      store_of_schema(dir, 14,
+                      {"INSERT INTO studies (name, models, n_points, study_file, study_text, scenario_file, "
+                       "scenario_text, pdamp_version, created_at) VALUES ('old', 'hard', 1, 'a', 'b', 'c', 'd', "
+                       "'0.1.0', '2026-01-01')",
+                       "INSERT INTO study_points (study_id, point, section) VALUES (1, 1, 'frf')",
+                       "INSERT INTO study_frf_points (study_id, point, curve, model, direction, host_alone, mode, "
+                       "level, frequency_hz, step) VALUES (1, 1, 1, 'hard', 'up', 0, 'force', 0.1, 15, 1)"});
   {
     sqlite::Database v14(file);
-    make_store_of_schema(v14, 14);
-    v14.exec(
-        "INSERT INTO studies (name, models, n_points, study_file, study_text, scenario_file, scenario_text, "
-        "pdamp_version, created_at) VALUES ('old', 'hard', 1, 'a', 'b', 'c', 'd', '0.1.0', '2026-01-01')");
-    v14.exec("INSERT INTO study_points (study_id, point, section) VALUES (1, 1, 'frf')");
-    v14.exec(
-        "INSERT INTO study_frf_points (study_id, point, curve, model, direction, host_alone, mode, level, "
-        "frequency_hz, step) VALUES (1, 1, 1, 'hard', 'up', 0, 'force', 0.1, 15, 1)");
     CHECK(scalar(v14, "SELECT count(*) FROM pragma_table_info('study_frf') WHERE name = 'grid'") == 0);
   }
   RunStore store(file);

@@ -485,7 +485,9 @@ TEST_CASE("an [frf] study gives the same bits for any --jobs, and after a SIGKIL
 TEST_CASE("an [frf] grid runs each key value's curve on its own: continued within it, the same bits as it alone") {
   test::TempDir dir("frf-grid");
   const auto file = dir / "grid.ini";
-  const std::string frf = "levels = 0.2\nfrequencies = 16, 18, 20\nmax_cycles = 30\n";
+  // Up to 120 cycles: points of 8-30 ms, so that the kill below finds one with a checkpoint
+  // (at 30 cycles some took 4 ms, within one of stop_when's slices).
+  const std::string frf = "levels = 0.2\nfrequencies = 16, 18, 20\nmax_cycles = 120\n";
   write_file(file, "[study]\nname = grid\nscenario = " + small() +
                        "\nmodels = hard\n\n[frf]\nmode = force\nhost.z0_m = 0\nparticles.count = 10, 20\n" + frf);
   const auto stores = run_study_per_jobs(file, dir, {1, 2});

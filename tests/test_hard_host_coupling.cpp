@@ -237,6 +237,47 @@ TEST_CASE("riders: a rider's departure re-predicts the spheres near it, and on a
   }
 }
 
+TEST_CASE("riders: a sphere coming to rest re-predicts the near spheres whose last search could reach it, no others") {
+  // A prescribed host, whose restart leaves the touching spheres' predictions standing. Rider
+  // 3 far off, so that spheres 1 (a diameter above the floor, near) and 2 (touching the
+  // floor) search boxes for riders when predicted (with no bed they search none, and any
+  // rider re-predicts them). Then sphere 0 comes to rest under sphere 1, whose box holds
+  // its place, and 1.5 mm from sphere 2, at rest, whose box reaches a diameter (1 mm)
+  // around it sideways: though within a cell of the new rider, sphere 2 keeps its prediction.
+  const Scenario s = test::scenario_from(
+      "[excitation]\nmode = prescribed\namplitude_m = 0.0001\nfrequency_hz = 30\n"
+      "[cavity]\ndiameter_m = 0.02\nheight_m = 0.01\n[particles]\ncount = 4\ndiameter_m = 0.001\n");
+  const double touching_gap = 1e-5 * r_m;
+  const Eigen::Vector3d new_rider(0.003, 0, r_m), sphere_2(0.0045, 0, r_m + touching_gap);
+  Parts parts(s, test::spheres({new_rider, Eigen::Vector3d(0.003, 0, 3 * r_m + touching_gap), sphere_2,
+                                Eigen::Vector3d(-0.006, 0, r_m)},
+                               std::vector<Eigen::Vector3d>(4, Eigen::Vector3d::Zero()), r_m));
+  REQUIRE(parts.host.restart(parts.host.attach(3, 1, 0.0).host_after, 0.0));
+  parts.host.enter_near(1, 0.0);
+  parts.host.enter_near(2, 0.0);
+  REQUIRE(parts.host.tier_of(1) == 0);
+  REQUIRE(parts.host.tier_of(2) == 3);
+  const CellGrid& grid = parts.flight.grid();
+  const CellCoord rider_cell = grid.coord_of(new_rider), cell_2 = grid.coord_of(sphere_2);
+  REQUIRE(std::abs(rider_cell.ix - cell_2.ix) <= 1);  // where the spheres re-predicted are sought
+  REQUIRE(rider_cell.iz == cell_2.iz);
+  const std::uint32_t stamp_1 = parts.flight.sphere(1).host_stamp, stamp_2 = parts.flight.sphere(2).host_stamp;
+  const double t = 1e-4;
+  const HostCoupling::Attached attached = parts.host.attach(0, 1, t);
+  REQUIRE(parts.host.restart(attached.host_after, t));
+  REQUIRE(parts.flight.sphere(1).host_stamp == stamp_1);  // the restart predicted neither
+  REQUIRE(parts.flight.sphere(2).host_stamp == stamp_2);
+  parts.host.repredict_near_around(attached.lab_position_m, t);
+  CHECK(parts.flight.sphere(1).host_stamp != stamp_1);
+  CHECK(parts.flight.sphere(2).host_stamp == stamp_2);
+  // Sphere 1's new prediction is its collision with the new rider, which the floor lifts into it.
+  bool collides = false;
+  for (const Event& e : test::drain(parts.flight.queue())) {
+    collides |= e.i == 1 && e.kind == EventKind::rider && e.j == 0 && e.count_j == parts.flight.sphere(1).host_stamp;
+  }
+  CHECK(collides);
+}
+
 TEST_CASE("books: the host's damping and excitation booked in stretches add up to one booking of the whole") {
   const Scenario s = test::scenario_from(
       "[host]\nmass_kg = 0.02\nstiffness_N_m = 900\ndamping_N_s_m = 0.3\nz0_m = 0.002\nv0_m_s = 0\n"

@@ -104,6 +104,7 @@ void HostCoupling::transfer(Self& h, Archive& a) {
   }
   a.part(h.touching_);
   a.io(std::span(h.touching_bound_), "the touching bounds");
+  a.io(std::span(h.searched_), "the search boxes");
 }
 PDAMP_CHECKPOINT_PART(HostCoupling);
 

@@ -18,6 +18,19 @@ const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 
 }  // namespace
 
+HostCoupling::SearchBox::SearchBox(const Eigen::Vector3d& centre_m, const Eigen::Vector3d& half_m) {
+  for (int d = 0; d < 3; ++d) {
+    low_m[d] = centre_m[d] - half_m[d];
+    high_m[d] = centre_m[d] + half_m[d];
+  }
+}
+
+bool HostCoupling::SearchBox::holds(const Eigen::Vector3d& p_m, double slack_m) const {
+  bool inside = true;
+  for (int d = 0; d < 3; ++d) inside &= p_m[d] + slack_m >= low_m[d] && p_m[d] - slack_m <= high_m[d];
+  return inside;
+}
+
 HostCoupling::MarginTier HostCoupling::tier(std::size_t level, const Particles& initial) const {
   return {ParticleSet(static_cast<int>(initial.size())), margin_fractions[level] * initial.radius_m.minCoeff(),
           1.0 / fastest_rate_1_s_};
@@ -37,7 +50,8 @@ HostCoupling::HostCoupling(const Scenario& scenario, const Particles& initial, F
       tiers_{tier(0, initial), tier(1, initial), tier(2, initial)},
       touching_(static_cast<int>(initial.size())),
       touching_bound_(initial.size()),
-      touching_slack_m_(0.01 * initial.radius_m.minCoeff()) {}
+      touching_slack_m_(0.01 * initial.radius_m.minCoeff()),
+      searched_(initial.size()) {}
 
 // ---------------------------------------------------------------------------------------------
 // The host's motion
@@ -181,6 +195,7 @@ void HostCoupling::predict_relative(int i, std::size_t first_level, double t_s) 
       for (std::size_t deeper = level + 1; deeper < tiers_.size(); ++deeper) tiers_[deeper].members.erase(i);
       touching_.erase(i);
       const HostContact margin = host_contact(i, end, tiers_[level].margin_m, t);
+      searched_[i] = margin.searched;
       if (margin.when.t_s < horizon) {
         flight_.push({margin.when.t_s, i, static_cast<std::int32_t>(level), stamp, EventKind::host_margin});
       }
@@ -190,6 +205,7 @@ void HostCoupling::predict_relative(int i, std::size_t first_level, double t_s) 
   }
   touching_.insert(i);
   const HostContact exact = host_contact(i, std::min(horizon, t + tiers_.back().horizon_s), 0.0, t, &riders_searched_);
+  searched_[i] = exact.searched;
   if (exact.when.contact) {
     flight_.push({exact.when.t_s, i, exact.partner, stamp, exact.kind});
   } else if (exact.when.t_s < horizon) {
@@ -315,7 +331,7 @@ HostCoupling::HostContact HostCoupling::host_contact(int i, double end_s, double
   const double r = particles.radius_m[i];
   const double tolerance = flight_.contact_tolerance_m();
   if (riders_searched) riders_searched->clear();
-  HostContact best{{end_s, false}, EventKind::host_margin, 0};
+  HostContact best{{end_s, false}, EventKind::host_margin, 0, {}};
   // A margin is reached whichever way the sphere moves: a sphere within it but receding
   // can still be caught by a host that strays by less than the margin.
   const double closing = margin_m > 0.0 ? within_margin : min_approach_speed_m_s;
@@ -324,7 +340,11 @@ HostCoupling::HostContact HostCoupling::host_contact(int i, double end_s, double
   auto consider = [&](const Approach& a, EventKind kind, int partner) {
     const bool wins_tie = a.t_s == best.when.t_s && a.contact &&
                           (!best.when.contact || std::tie(kind, partner) < std::tie(best.kind, best.partner));
-    if (a.t_s < best.when.t_s || wins_tie) best = {a, kind, partner};
+    if (a.t_s < best.when.t_s || wins_tie) {
+      best.when = a;
+      best.kind = kind;
+      best.partner = partner;
+    }
   };
   // The root finders run only where the bounds on the motion let a gap close: not for the
   // cap a sphere is far from, nor for most riders in the box (a result they would give,
@@ -354,6 +374,7 @@ HostCoupling::HostContact HostCoupling::host_contact(int i, double end_s, double
       f.velocity_at(t, gravity_m_s2_).cwiseAbs() * span + 0.5 * gravity_m_s2_.cwiseAbs() * span * span;
   half.array() += r + flight_.max_radius_m() + margin_m;
   half.z() += host_speed * span + (margin_m > 0.0 ? 0.0 : touching_slack_m_);
+  best.searched = {centre, half};
   // The distance to a rider closes at most at the relative speed, which grows at most by
   // |g| + |z_h''|.
   const double speed = velocity.norm(), rider_curvature = gravity_m_s2_.norm() + acceleration_bound;
@@ -407,13 +428,20 @@ void HostCoupling::sweep_tier(std::size_t level, double t_s) {
 void HostCoupling::repredict_near_around(const Eigen::Vector3d& lab_position_m, double t_s) {
   // A near sphere looks for riders within a cell of its own and the host's motion
   // within its window: three layers either way cover every sphere that could reach here.
+  // Of those, a sphere whose last prediction searched a box without this place in it
+  // could not have reached it before its event: that prediction stands.
   const CellGrid& grid = flight_.grid();
   const CellCoord c = grid.coord_of(lab_position_m);
+  const Eigen::Vector3d host_frame = lab_position_m - now(t_s).z_m * e_z;
+  const double slack = flight_.contact_tolerance_m();
   for (int iz = c.iz - 3; iz <= c.iz + 3; ++iz) {
     for (int iy = std::max(0, c.iy - 1); iy <= std::min(grid.ny() - 1, c.iy + 1); ++iy) {
       for (int ix = std::max(0, c.ix - 1); ix <= std::min(grid.nx() - 1, c.ix + 1); ++ix) {
         flight_.for_each_free_in(grid.index({ix, iy, iz}), [&](int j) {
-          if (tiers_[0].members.contains(j) && flight_.sphere(j).cell.iz == iz) predict_relative(j, 0, t_s);
+          if (tiers_[0].members.contains(j) && flight_.sphere(j).cell.iz == iz &&
+              searched_[j].holds(host_frame, slack)) {
+            predict_relative(j, 0, t_s);
+          }
         });
       }
     }

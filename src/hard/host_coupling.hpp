@@ -183,10 +183,20 @@ class HostCoupling {
     double deviation_m = 0.0;  ///< how far the host may have strayed since, all one way
     int direction = 0;         ///< that way: +1 up, −1 down, 0 not at all
   };
+  /// The host-frame box host_contact searched for riders: a rider whose centre lies outside
+  /// it cannot be reached before the event it predicted.
+  struct SearchBox {
+    /// Its corners; by default everywhere (no riders were searched).
+    std::array<double, 3> low_m{-never, -never, -never}, high_m{never, never, never};
+    SearchBox() = default;
+    SearchBox(const Eigen::Vector3d& centre_m, const Eigen::Vector3d& half_m);
+    bool holds(const Eigen::Vector3d& p_m, double slack_m) const;
+  };
   struct HostContact {
     Approach when;
     EventKind kind;
     int partner;
+    SearchBox searched;
   };
 
   void sweep_tier(std::size_t level, double t_s);
@@ -251,6 +261,9 @@ class HostCoupling {
   /// riders beyond the box stay out of reach of a host that strays less than this.
   double touching_slack_m_;
   std::vector<int> riders_searched_;  ///< predict_relative's scratch: the riders its exact search saw
+  /// Each near sphere's box of its last prediction: a rider that comes or goes outside it
+  /// leaves the prediction standing (repredict_near_around).
+  std::vector<SearchBox> searched_;
 };
 
 }  // namespace pdamp::hard

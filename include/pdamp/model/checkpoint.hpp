@@ -27,8 +27,9 @@ namespace pdamp {
 /// saves once, in one function template over the writer (with the part const) and the
 /// reader: `template <class Self, class Archive> static void transfer(Self&, Archive&)`.
 
-/// The format of the blob; a reader refuses any other.
-inline constexpr std::uint32_t checkpoint_format_version = 1;
+/// The format of the blob; a reader refuses any other. Raised whenever an engine saves
+/// more or other state (2: the hard engine's rider search boxes).
+inline constexpr std::uint32_t checkpoint_format_version = 2;
 
 class CheckpointWriter {
  public:

@@ -83,10 +83,11 @@ void HardEngine::check_overlaps(double t_s) {
 #endif
   next_check_event_ = events_ + check_events();
   calls_since_check_ = 0;
-  if (const double overlap = max_overlap_m(); overlap > overlap_tolerance_m()) {
+  if (const Overlap overlap = deepest_overlap(); overlap.depth_m > overlap_tolerance_m()) {
     std::ostringstream why;
-    why << "hard engine invariant broken at t = " << t_s << " s: spheres overlap by " << overlap << " m (tolerance "
-        << overlap_tolerance_m() << " m); the engine missed an event, a defect to report";
+    why << "hard engine invariant broken at t = " << t_s << " s: " << describe(overlap) << " overlap by "
+        << overlap.depth_m << " m (tolerance " << overlap_tolerance_m()
+        << " m); the engine missed an event, a defect to report";
     throw RuntimeFailure(why.str());
   }
 }
@@ -178,7 +179,14 @@ void HardEngine::diagnose(EventDiagnosis::Kind kind, int i, int partner, double 
   diagnosis_->note(kind, t_s_, approach_m_s, effective_mass_kg, flight_.sphere(i).last_collision_s, partner_previous_s);
 }
 
-double HardEngine::max_overlap_m() const {
+std::string HardEngine::describe(const Overlap& overlap) const {
+  const auto sphere = [&](int k) {
+    return "sphere " + std::to_string(k) + (flight_.sphere(k).riding ? " (riding)" : " (free)");
+  };
+  return sphere(overlap.i) + " and " + (overlap.j < 0 ? std::string("the walls") : sphere(overlap.j));
+}
+
+HardEngine::Overlap HardEngine::deepest_overlap() const {
   const HostState host = host_.trajectory().at(t_s_);
   const PackedParticles& particles = flight_.particles();
   const CellGrid& grid = flight_.grid();
@@ -187,18 +195,20 @@ double HardEngine::max_overlap_m() const {
   for (Eigen::Index i = 0; i < n; ++i) positions.col(i) = position_now(static_cast<int>(i), host);
   CellList cells;
   cells.build(grid, positions);
-  double deepest = 0.0;
+  Overlap deepest;
+  const auto note = [&](double depth_m, Eigen::Index i, int j) {
+    if (depth_m > deepest.depth_m) deepest = {depth_m, static_cast<int>(i), j};
+  };
   std::array<int, 27> around{};
   const Cavity& cavity = flight_.cavity();
   for (Eigen::Index i = 0; i < n; ++i) {
     const double r = particles.radius_m[i];
-    deepest = std::max(deepest, -cavity.clearance_m(positions.col(i), r, host.z_m));
+    note(-cavity.clearance_m(positions.col(i), r, host.z_m), i, -1);
     const int count = grid.neighbours(grid.coord_of(positions.col(i)), around);
     for (int c = 0; c < count; ++c) {
       for (const int j : cells.particles_in(around[c])) {
         if (j <= i) continue;
-        const double gap = (positions.col(i) - positions.col(j)).norm() - r - particles.radius_m[j];
-        deepest = std::max(deepest, -gap);
+        note(r + particles.radius_m[j] - (positions.col(i) - positions.col(j)).norm(), i, j);
       }
     }
   }

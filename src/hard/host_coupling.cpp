@@ -148,14 +148,18 @@ HostCoupling::Attached HostCoupling::attach(int i, int side, double t_s) {
   flight_.new_trajectory(i);
   flight_.sphere(i).riding = 1;
   bed_side_ = side;
-  const Eigen::Vector3d host_frame = particles.position_m.col(i) - host.z_m * e_z;
+  Eigen::Vector3d host_frame = particles.position_m.col(i) - host.z_m * e_z;
+  // A sphere that rests on its cap sits at contact, not within the root finders'
+  // tolerance beyond it: a rider knocked off and landing again would otherwise start
+  // each flight up to that tolerance deeper, and the overlap would ratchet.
+  const double r = particles.radius_m[i];
+  host_frame.z() = side > 0 ? std::max(host_frame.z(), r) : std::min(host_frame.z(), cavity_.height_m() - r);
   particles.position_m.col(i) = host_frame;
   particles.velocity_m_s.col(i).setZero();
   particles.angular_velocity_rad_s.col(i).setZero();
   rider_cells_.insert(i, flight_.grid().cell_of(host_frame));
   riding_mass_kg_ += m;
   ++riding_count_;
-  const double r = particles.radius_m[i];
   const double depth = bed_side_ > 0 ? host_frame.z() + r : cavity_.height_m() - host_frame.z() + r;
   const bool deeper = depth > bed_depth_bound_m_;
   if (deeper) bed_depth_bound_m_ = depth + flight_.grid().cell_size_m();

@@ -133,6 +133,7 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
        "--diagnose-events counts the event-driven engine's collisions: it needs --model hard"},
       {{"frobnicate"}, "unknown command"},
       {{"show", "abc", "--db", db.string()}, "RUN_ID 'abc'"},
+      {{"resume", "-1", "--db", db.string()}, "unrecognised option '-1': a negative number, where pdamp takes IDs"},
       {{"run", "--scenario", table1(), "--model", "soft", "--threads", "0", "--db", db.string()}, "--threads '0'"},
       {{"run", "--scenario", table1(), "--model", "soft", "--simd", "avx1024", "--db", db.string()},
        "--simd 'avx1024': must be sse2, avx2 or avx512"},

@@ -24,6 +24,17 @@ CommandLine parse_options(const std::vector<std::string>& args, const po::option
     po::store(parsed, line.vm);
     po::notify(line.vm);
     line.in_order = parsed.options;
+  } catch (const po::unknown_option& e) {
+    // "-1" given for RUN_ID looks like an option to the parser: say what is wrong with it.
+    const std::string& token = e.get_option_name();
+    double number = 0.0;
+    const char* end = token.data() + token.size();
+    const auto [ptr, ec] = std::from_chars(token.data(), end, number);
+    const bool negative_number = ec == std::errc() && ptr == end;
+    throw InputError(std::string(e.what()) +
+                     (negative_number ? ": a negative number, where pdamp takes IDs and counts that are positive "
+                                        "whole numbers"
+                                      : ""));
   } catch (const po::error& e) {
     throw InputError(std::string(e.what()));
   }

@@ -53,7 +53,7 @@ class CellMembers {
     // sphere sits among its cell's members is a coin toss. Slots beyond the count may
     // still hold former members: they do not count.
     int place = inline_capacity;
-    for (int k = inline_capacity - 1; k >= 0; --k) place = (k < c.count) & (c.members[k] == particle) ? k : place;
+    for (int k = inline_capacity - 1; k >= 0; --k) place = ((k < c.count) & (c.members[k] == particle)) ? k : place;
     int* const slot = c.members.data() + place;
     int* const inline_end = c.members.data() + inline_capacity;
     --c.count;

@@ -104,7 +104,7 @@ inline int CellGrid::index(const CellCoord& c) const {
   const int layer_size = n_xy_ * n_xy_, period = n_z_ * layer_size;
   const std::array<int, 3> layers{layer == 0 ? period - layer_size : layer - layer_size, layer,
                                   layer + layer_size == period ? 0 : layer + layer_size};
-  std::array<bool, 3> row_inside{}, column_inside{};
+  std::array<int, 3> row_inside{}, column_inside{};  // ints: `&` of them is meant, without a branch
   for (int d = 0; d < 3; ++d) {
     row_inside[d] = c.iy - 1 + d >= 0 && c.iy - 1 + d < n_xy_;
     column_inside[d] = c.ix - 1 + d >= 0 && c.ix - 1 + d < n_xy_;
@@ -114,7 +114,7 @@ inline int CellGrid::index(const CellCoord& c) const {
     for (int dy = 0; dy < 3; ++dy) {
       for (int dx = 0; dx < 3; ++dx) {
         const int cell = z_offset + (c.iy - 1 + dy) * n_xy_ + c.ix - 1 + dx;
-        out[k++] = row_inside[dy] & column_inside[dx] ? cell : outside;
+        out[k++] = (row_inside[dy] & column_inside[dx]) != 0 ? cell : outside;
       }
     }
   }

@@ -555,6 +555,8 @@ TEST_CASE(
     "snapshots of [frf] points: frames at their cycle boundaries, the same bits as without, after a SIGKILL too") {
   test::TempDir dir("frf-snapshots");
   const auto file = dir / "frf.ini";
+  // Up to 120 cycles, as the grid test's: points long enough for the kill below to find one
+  // with a checkpoint.
   write_file(file, frf_study("levels = 0.2\nfrequencies = 16, 18\nmax_cycles = 120\n"));
   const auto plain = run_study_per_jobs(file, dir, {1}).at(1);
   // Every other cycle at 16 Hz (0.1 s / 0.0625 s rounds to 2) and at 18 Hz (1.8 rounds to 2).

@@ -27,9 +27,9 @@ using namespace pdamp::test;
 namespace {
 
 /// An [frf] study on small.ini with 20 spheres, hard model.
-std::string frf_study(const std::string& frf) {
+std::string frf_study(const std::string& frf, int particles = 20) {
   return "[study]\nscenario = " + small() + "\nmodels = hard\n\n[frf]\nmode = force\nhost.z0_m = 0\n" +
-         "particles.count = 20\n" + frf;
+         "particles.count = " + std::to_string(particles) + "\n" + frf;
 }
 
 Study study_of(const std::string& text) {
@@ -585,7 +585,9 @@ TEST_CASE(
 TEST_CASE("a start = predict [frf] study killed in a predicted point and resumed: from its checkpoint, the same bits") {
   test::TempDir dir("frf-predict-kill");
   const auto file = dir / "frf.ini";
-  write_file(file, frf_study("levels = 0.05, 0.2\nfrequencies = 15, 17, 19\nmax_cycles = 60\nstart = predict\n"));
+  // 40 spheres: with 20, a point ran in milliseconds, and the study could end before a
+  // predicted point was seen running with a checkpoint.
+  write_file(file, frf_study("levels = 0.05, 0.2\nfrequencies = 15, 17, 19\nmax_cycles = 60\nstart = predict\n", 40));
   const auto reference = run_study_per_jobs(file, dir, {2}).at(2);
   CHECK(count_rows(reference, "SELECT count(*) FROM study_frf_metrics") == 6);
 

@@ -104,6 +104,19 @@ class Process {
   long peak_memory_kB() const { return peak_memory_kB_; }
   void signal(int number) const { kill(pid_, number); }
   void signal_group(int number) const { kill(-pid_, number); }
+  /// SIGKILL to the process and its children (Group::own); waits for it, then up to 10 s
+  /// until no child is left but as a zombie, and returns its exit code. The signal reaches
+  /// each process in its own time: a study worker still exiting when the test goes on
+  /// would hold its point's lease, and a resume would find the point running.
+  int kill_group() {
+    signal_group(SIGKILL);
+    const int code = wait();
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (group_has_living_member() && std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return code;
+  }
   std::string out() const { return slurp(out_); }
   std::string err() const { return slurp(err_); }
 
@@ -113,6 +126,20 @@ class Process {
     std::ostringstream text;
     text << in.rdbuf();
     return text.str();
+  }
+  /// Whether a process of the group this one leads lives (zombies do not).
+  bool group_has_living_member() const {
+    for (const auto& entry : std::filesystem::directory_iterator("/proc")) {
+      std::ifstream stat(entry.path() / "stat");
+      std::string line;
+      if (!std::getline(stat, line)) continue;  // not a process, or gone
+      // pid (comm) state ppid pgrp ...; comm may hold spaces and parentheses.
+      std::istringstream rest(line.substr(line.rfind(')') + 1));
+      char state = 0;
+      long ppid = 0, pgrp = 0;
+      if (rest >> state >> ppid >> pgrp && pgrp == pid_ && state != 'Z' && state != 'X') return true;
+    }
+    return false;
   }
   pid_t pid_ = 0;
   long peak_memory_kB_ = 0;
@@ -220,8 +247,7 @@ inline void kill_study_when(const std::filesystem::path& file, const std::filesy
   Process study(args, dir, "study", Group::own);
   const bool ready = stop_when(study, [&] { return store_is_ready(store, view, ready_sql); });
   INFO("the store reached the state to kill the study in: " << ready);
-  study.signal_group(SIGKILL);
-  CHECK(study.wait() == 128 + SIGKILL);
+  CHECK(study.kill_group() == 128 + SIGKILL);
 }
 
 /// kill_study_when at least `completed` points are completed.

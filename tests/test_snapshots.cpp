@@ -407,8 +407,7 @@ TEST_CASE("pdamp resume continues a killed run's snapshots: the same files, byte
           "SELECT count(*) FROM run_checkpoints WHERE run_id = 2 AND t_s < " + std::string(last_frame_s));
     });
     CHECK(frame_after_checkpoint);
-    killed.signal_group(SIGKILL);
-    killed.wait();
+    killed.kill_group();
     RunStore store(db, StoreAccess::read);
     REQUIRE(store.summary(2)->status == "dead");
     const double checkpoint_s = store.checkpoint(2)->checkpoint.t_s;

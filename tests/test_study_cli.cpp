@@ -242,8 +242,7 @@ TEST_CASE("a study killed mid-run continues its points in progress from their ch
     Process study({"study", "resume", "1", "--db", killed.string(), "--jobs", "2", "--checkpoint-every", "0.05"}, dir,
                   "resume", Group::own);
     REQUIRE(wait_until(killed, std::string(mid_run) + " AND (" + test::checkpointed_unfinished_runs + ") > 0"));
-    study.signal_group(SIGKILL);
-    CHECK(study.wait() == 128 + SIGKILL);
+    CHECK(study.kill_group() == 128 + SIGKILL);
   }
   const std::int64_t completed_before =
       count_rows(killed, "SELECT count(*) FROM study_points WHERE status = 'completed'");

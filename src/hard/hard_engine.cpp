@@ -385,8 +385,8 @@ void HardEngine::merge_jam(int i) {
   for (const int k : cluster.members) predict(k);
 }
 
-void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out, const HostState& host,
-                                    int rider) {
+HostState HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const CollisionOutcome& out,
+                                         const HostState& host, int rider) {
   PackedParticles& particles = flight_.particles();
   const Eigen::Vector3d& p = out.impulse_N_s;
   const double r = particles.radius_m[i];
@@ -399,9 +399,9 @@ void HardEngine::apply_host_impulse(int i, const Eigen::Vector3d& n, const Colli
   host_.take_impulse(-p.z(), t_s_);
   if (host_.prescribed()) {
     books_.excitation_J += p.z() * host.v_m_s;  // the wall's work on the sphere
-  } else if (p.z() != 0.0) {
-    restart_host({host.z_m, host.v_m_s - p.z() * host_.inverse_mass_1_kg()});
+    return host;
   }
+  return {host.z_m, host.v_m_s - p.z() * host_.inverse_mass_1_kg()};
 }
 
 void HardEngine::collide_wall(int i, EventKind wall) {
@@ -431,13 +431,14 @@ void HardEngine::collide_wall(int i, EventKind wall) {
     diagnose(side_wall ? EventDiagnosis::side_wall : EventDiagnosis::cap, i, -1, approach);
   const HardContactLaw law = law_for(approach, true, i, -1);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
-  apply_host_impulse(i, n, out, host);
+  const HostState after = apply_host_impulse(i, n, out, host);
   if (side_wall) {
     particles.velocity_m_s.col(i).head<2>() =
         turned_along_side_wall(particles.velocity_m_s.col(i).head<2>(), n.head<2>(), laws_.elastic_speed_m_s());
+    if (after.v_m_s != host.v_m_s) restart_host(after);
     predict(i);
   } else {
-    rest_if_slow(i, -n, host_.now(t_s_));  // the host as the impulse left it
+    rest_if_slow(i, -n, -1, host, after);
   }
 }
 
@@ -460,7 +461,7 @@ void HardEngine::collide_rider(int i, int j) {
     // slip along one contact into approach towards the next for ever. The sphere is
     // jammed in the bed, so it comes to rest in it.
     ++books_.counts.jammed;
-    attach(i, host_.bed_side());
+    attach(i, host_.bed_side(), j, host);
     return;
   }
   if (approach > rest_speed_m_s_) {
@@ -477,8 +478,7 @@ void HardEngine::collide_rider(int i, int j) {
     diagnose(EventDiagnosis::rider, i, j, approach);
   const HardContactLaw law = law_for(approach, false, i, -1, j);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
-  apply_host_impulse(i, n, out, host, j);
-  rest_if_slow(i, -n, host_.trajectory().at(t_s_));
+  rest_if_slow(i, -n, j, host, apply_host_impulse(i, n, out, host, j));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -488,18 +488,20 @@ void HardEngine::restart_host(HostState start) {
   if (!host_.restart(start, t_s_)) rebuild_predictions();
 }
 
-void HardEngine::rest_if_slow(int i, const Eigen::Vector3d& normal_from_support, const HostState& host) {
-  const double leaving = (flight_.particles().velocity_m_s.col(i) - host.v_m_s * e_z).dot(normal_from_support);
-  if (host_.rests(leaving, normal_from_support.z(), t_s_)) {
-    attach(i, normal_from_support.z() > 0 ? 1 : -1);
-  } else {
-    predict(i);
+void HardEngine::rest_if_slow(int i, const Eigen::Vector3d& normal_from_support, int support, const HostState& before,
+                              const HostState& after) {
+  const double leaving = (flight_.particles().velocity_m_s.col(i) - after.v_m_s * e_z).dot(normal_from_support);
+  if (host_.rests(leaving, normal_from_support.z(), after, t_s_)) {
+    attach(i, normal_from_support.z() > 0 ? 1 : -1, support, after);
+    return;
   }
+  if (after.v_m_s != before.v_m_s) restart_host(after);
+  predict(i);
 }
 
-void HardEngine::attach(int i, int side) {
+void HardEngine::attach(int i, int side, int support, const HostState& host) {
   clusters_.leave(i);
-  const HostCoupling::Attached attached = host_.attach(i, side, t_s_);
+  const HostCoupling::Attached attached = host_.attach(i, side, support, host, t_s_);
   restart_host(attached.host_after);
   if (attached.bed_deeper) {
     rebuild_predictions();

@@ -135,18 +135,23 @@ class HardEngine final : public Engine {
   void release_bed();
 
   // The host.
-  /// A sphere-host collision outcome applied to sphere i (arm r n) and the host; its loss
-  /// is shared with `rider` if a riding sphere took the impulse for the host.
-  void apply_host_impulse(int i, const Eigen::Vector3d& normal, const CollisionOutcome& outcome, const HostState& host,
-                          int rider = -1);
+  /// A sphere-host collision outcome applied to sphere i (arm r n) and the host in state
+  /// `host`; its loss is shared with `rider` if a riding sphere took the impulse for the
+  /// host. Returns the host's state after it; the caller restarts the host.
+  HostState apply_host_impulse(int i, const Eigen::Vector3d& normal, const CollisionOutcome& outcome,
+                               const HostState& host, int rider = -1);
   /// The host moves on from `start` (HostCoupling::restart), and every prediction is
   /// made anew if it may now move faster than the far spheres' checks assumed.
   void restart_host(HostState start);
-  /// After a collision with its support (normal from it), sphere i comes to rest or is predicted anew.
-  void rest_if_slow(int i, const Eigen::Vector3d& normal_from_support, const HostState& host);
-  /// Sphere i comes to rest on the bed on `side` (+1 the floor, −1 the top cap): the
-  /// host restarts with it, and the near spheres that could reach it are predicted anew.
-  void attach(int i, int side);
+  /// After a collision with its support (rider `support`, or −1 for a cap; normal from it)
+  /// that took the host from `before` to `after`, sphere i comes to rest, or is predicted
+  /// anew; either way the host restarts once.
+  void rest_if_slow(int i, const Eigen::Vector3d& normal_from_support, int support, const HostState& before,
+                    const HostState& after);
+  /// Sphere i comes to rest on the bed on `side` (+1 the floor, −1 the top cap), on rider
+  /// `support` (−1: its cap), the host in state `host`: the host restarts with it, and the
+  /// near spheres that could reach it are predicted anew.
+  void attach(int i, int side, int support, const HostState& host);
 
   FreeFlight flight_;
   HardLedger books_;

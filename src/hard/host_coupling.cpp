@@ -59,10 +59,8 @@ HostCoupling::HostCoupling(const Scenario& scenario, const Particles& initial, F
 bool HostCoupling::restart(HostState start, double t_s) {
   ++ledger_.counts.host_impulses;
   book(t_s);
-  const double old_velocity_m_s = trajectory_.at(t_s).v_m_s;
-  const double velocity_change = std::abs(start.v_m_s - old_velocity_m_s);
-  const double mass_change = std::abs(riding_mass_kg_ - trajectory_riding_mass_kg_);
-  const double old_acceleration_bound = trajectory_.acceleration_bound_m_s2();
+  const HostState old = trajectory_.at(t_s);
+  const Departure departure = this->departure(old, start, t_s);
   trajectory_ = HostTrajectory(model_, t_s, start, riding_mass_kg_, riding_mass_kg_ * gravity_m_s2_.z());
   trajectory_riding_mass_kg_ = riding_mass_kg_;
   ++epoch_;
@@ -74,19 +72,14 @@ bool HostCoupling::restart(HostState start, double t_s) {
     predict_bed_release(t_s);
     return true;
   }
-  departed_m_.clear();
   if (trajectory_.speed_bound_m_s() > speed_envelope_m_s_) {
+    departed_m_.clear();
     speed_envelope_m_s_ = 2.0 * trajectory_.speed_bound_m_s();
     return false;
   }
-  // The new trajectory minus the old one solves the host's equation with initial
-  // velocity Δv and a force Δm (g_z − z_h''), so within τ it strays by at most
-  // |Δv| τ + ½ Δm (|g_z| + |z_h''|max) / M_new τ².
-  const double acceleration_change =
-      mass_change * (std::abs(gravity_m_s2_.z()) + old_acceleration_bound) / (model_.mass_kg() + riding_mass_kg_);
   for (MarginTier& tier : tiers_) {
     const double tau = tier.horizon_s;
-    tier.budget_m += velocity_change * tau + 0.5 * acceleration_change * tau * tau;
+    tier.budget_m += departure.velocity_m_s * tau + 0.5 * departure.acceleration_m_s2 * tau * tau;
   }
   // The outermost tier whose budget is spent is swept (with every tier inside it);
   // otherwise only the touching spheres need new predictions.
@@ -95,9 +88,8 @@ bool HostCoupling::restart(HostState start, double t_s) {
   if (spent != tiers_.end()) {
     sweep_tier(static_cast<std::size_t>(spent - tiers_.begin()), t_s);
   } else {
-    const double velocity_change_m_s = start.v_m_s - old_velocity_m_s;
     touching_.sweep([&](int i) {
-      if (mass_change == 0.0 && defer_touching(i, velocity_change_m_s, t_s)) {
+      if (!departed_from_box(i, t_s) && defer_touching(i, departure, t_s)) {
         ++ledger_.counts.touching_deferrals;
         touching_.insert(i);
         return;
@@ -106,29 +98,59 @@ bool HostCoupling::restart(HostState start, double t_s) {
       predict_relative(i, tiers_.size() - 1, t_s);
     });
   }
+  departed_m_.clear();
   predict_bed_release(t_s);
   return true;
 }
 
-bool HostCoupling::presses(double normal_z_from_support, double t_s) const {
+HostCoupling::Departure HostCoupling::departure(const HostState& old, const HostState& start, double t_s) const {
+  // The new trajectory minus the old one solves (M + m_new) d'' + C d' + K d =
+  // Δm (g_z − z_old'') from d = 0 and d' = Δv, so d(s) = Δv h(s) + ∫ h(s − u) Δm (g_z −
+  // z_old''(u)) / (M + m_new) du, with the homogeneous response 0 ≤ h(s) ≤ s for s up to
+  // half a damped period, longer than any tier looks ahead (its horizon is at most 1/ω of
+  // the host alone, the fastest). Hence the bound on |d|; and d goes all one way while the
+  // force keeps the sign of Δv, which it does while |z_old''(u) − z_old''(t)| stays below
+  // |g_z − z_old''(t)|, at least until the old trajectory's jerk bound lets it cross. A
+  // sphere coming to rest pulls the host towards it while its weight pushes the host
+  // away, so a collision and the sticking that ends it restart the host once (attach):
+  // together, the host gives way.
+  const double velocity_change = start.v_m_s - old.v_m_s;
+  const double mass_change = riding_mass_kg_ - trajectory_riding_mass_kg_;
+  const double relative_gravity = gravity_m_s2_.z() - trajectory_.acceleration_m_s2(t_s, old);
+  const double force = mass_change * relative_gravity;
+  const int pushed = (velocity_change > 0.0) - (velocity_change < 0.0);
+  const int forced = (force > 0.0) - (force < 0.0);
+  Departure d{};
+  d.direction = pushed * forced < 0 ? 0 : pushed + forced * (pushed == 0);
+  d.velocity_m_s = std::abs(velocity_change);
+  d.acceleration_m_s2 = std::abs(mass_change) * (std::abs(gravity_m_s2_.z()) + trajectory_.acceleration_bound_m_s2()) /
+                        (model_.mass_kg() + riding_mass_kg_);
+  d.until_s = never;
+  if (mass_change != 0.0) {
+    const double jerk = trajectory_.jerk_bound_m_s3();
+    d.until_s = forced == 0 ? t_s : jerk > 0.0 ? t_s + std::abs(relative_gravity) / jerk : never;
+  }
+  return d;
+}
+
+bool HostCoupling::presses(double normal_z_from_support, const HostState& host, double t_s) const {
   // The support pushes the sphere while the relative gravity g − z_h'' points into it.
-  const double relative_gravity_z = gravity_m_s2_.z() - trajectory_.acceleration_m_s2(t_s);
+  const double relative_gravity_z = gravity_m_s2_.z() - trajectory_.acceleration_m_s2(t_s, host);
   return normal_z_from_support * relative_gravity_z < 0.0;
 }
 
 // ---------------------------------------------------------------------------------------------
 // The resting bed
 
-bool HostCoupling::rests(double leaving_m_s, double normal_z_from_support, double t_s) const {
+bool HostCoupling::rests(double leaving_m_s, double normal_z_from_support, const HostState& host, double t_s) const {
   const int side = normal_z_from_support > 0 ? 1 : -1;
-  return leaving_m_s < rest_speed_m_s_ && presses(normal_z_from_support, t_s) &&
+  return leaving_m_s < rest_speed_m_s_ && presses(normal_z_from_support, host, t_s) &&
          (riding_count_ == 0 || bed_side_ == side);
 }
 
-HostCoupling::Attached HostCoupling::attach(int i, int side, double t_s) {
+HostCoupling::Attached HostCoupling::attach(int i, int side, int support, const HostState& host, double t_s) {
   ++ledger_.counts.rests;
   book(t_s);  // with the riding mass of the interval that ends now
-  const HostState host = trajectory_.at(t_s);
   PackedParticles& particles = flight_.particles();
   const double m = particles.mass_kg[i];
   const Eigen::Vector3d v = particles.velocity_m_s.col(i);
@@ -149,10 +171,16 @@ HostCoupling::Attached HostCoupling::attach(int i, int side, double t_s) {
   flight_.sphere(i).riding = 1;
   bed_side_ = side;
   Eigen::Vector3d host_frame = particles.position_m.col(i) - host.z_m * e_z;
-  // A sphere that rests on its cap sits at contact, not within the root finders'
-  // tolerance beyond it: a rider knocked off and landing again would otherwise start
-  // each flight up to that tolerance deeper, and the overlap would ratchet.
+  // A sphere that rests sits at contact with what it landed on, not within the root
+  // finders' tolerance beyond it: a rider knocked off and landing again would otherwise
+  // start each flight up to that tolerance deeper, and the overlap would ratchet.
   const double r = particles.radius_m[i];
+  if (support >= 0) {
+    const Eigen::Vector3d below = particles.position_m.col(support);
+    const Eigen::Vector3d out = host_frame - below;
+    const double contact = r + particles.radius_m[support], distance = out.norm();
+    if (distance < contact) host_frame = below + out * (contact / distance);
+  }
   host_frame.z() = side > 0 ? std::max(host_frame.z(), r) : std::min(host_frame.z(), cavity_.height_m() - r);
   particles.position_m.col(i) = host_frame;
   particles.velocity_m_s.col(i).setZero();
@@ -250,27 +278,27 @@ HostCoupling::TouchingBound HostCoupling::touching_bound(int i, double until_s, 
   return bound;
 }
 
-bool HostCoupling::defer_touching(int i, double velocity_change_m_s, double t_s) {
-  // The new host trajectory minus the old one solves the host's homogeneous equation (the
-  // same mass, spring, damper and forcing) from zero displacement and velocity Δv: it is
-  // Δv h(s) with 0 ≤ h(s) ≤ s for s up to half a damped period, longer than any touching
-  // prediction looks ahead (a tier's horizon is at most 1/ω). So after impulses all one
-  // way, the walls and riders have moved that way by at most Σ |Δv| (t_event − t_impulse)
-  // and never back. A cap or rider moving away from the sphere can only meet it later
-  // than predicted; one moving towards it closes its gap by at most the deviation. So the
-  // prediction stands as a lower bound if every surface that moves towards the sphere is
-  // farther than that. Moving down, those are the top cap and the riders whose centres
-  // are above the sphere's lowest point (a rider's distance changes by at most the
-  // deviation, and grows if its centre stays below the sphere's); moving up, the mirror.
-  // Riders outside the box searched are farther than the slack it had.
+bool HostCoupling::defer_touching(int i, const Departure& departure, double t_s) {
+  // After restarts all one way, the walls and riders have moved that way by at most the
+  // departures' sum until the sphere's event, and never back (departure). A cap or rider
+  // moving away from the sphere can only meet it later than predicted; one moving towards
+  // it closes its gap by at most the deviation. So the prediction stands as a lower bound
+  // if every surface that moves towards the sphere is farther than that. Moving down,
+  // those are the top cap and the riders whose centres are above the sphere's lowest
+  // point (a rider's distance changes by at most the deviation, and grows if its centre
+  // stays below the sphere's); moving up, the mirror. Riders outside the box searched are
+  // farther than the slack it had; riders that came since are predicted for by
+  // repredict_near_around.
   TouchingBound& b = touching_bound_[i];
-  if (velocity_change_m_s == 0.0) return true;
-  const int direction = velocity_change_m_s > 0.0 ? 1 : -1;
+  if (departure.velocity_m_s == 0.0 && departure.acceleration_m_s2 == 0.0) return true;
+  const int direction = departure.direction;
+  if (direction == 0 || b.event_s > departure.until_s) return false;
   if (b.direction != 0 && b.direction != direction) return false;
   const double r = flight_.particles().radius_m[i];
-  const double deviation = b.deviation_m + std::abs(velocity_change_m_s) * (b.event_s - t_s);
+  const double span = b.event_s - t_s;
+  const double deviation =
+      b.deviation_m + departure.velocity_m_s * span + 0.5 * departure.acceleration_m_s2 * span * span;
   const double clearance = direction < 0 ? cavity_.height_m() - r - b.highest_m : b.lowest_m - r;
-  // (Riders attached since the prediction changed the riding mass, which re-predicts.)
   const double riders =
       riding_count_ > 0 ? std::min(direction < 0 ? b.gap_above_m : b.gap_below_m, touching_slack_m_) : never;
   if (!(std::min(clearance, riders) - deviation > flight_.contact_tolerance_m())) return false;
@@ -282,6 +310,13 @@ bool HostCoupling::defer_touching(int i, double velocity_change_m_s, double t_s)
   b.deviation_m = deviation;
   b.direction = direction;
   return true;
+}
+
+bool HostCoupling::departed_from_box(int i, double t_s) const {
+  const double host_z = now(t_s).z_m;
+  return std::any_of(departed_m_.begin(), departed_m_.end(), [&](const Eigen::Vector3d& lab_m) {
+    return searched_[i].holds(lab_m - host_z * e_z, flight_.contact_tolerance_m());
+  });
 }
 
 template <class Visit>

@@ -100,20 +100,23 @@ class HostCoupling {
   int bed_side() const { return bed_side_; }
   /// Whether a free sphere leaving its support (the floor, the top cap or a rider; its
   /// normal's z component `normal_z_from_support`) at `leaving_m_s` comes to rest there
-  /// at t_s: slower than the rest speed, pressed there by the host's acceleration, and on
-  /// the side of the bed if there is one.
-  bool rests(double leaving_m_s, double normal_z_from_support, double t_s) const;
+  /// at t_s, the host then in state `host` (after the collision's impulse, before it
+  /// restarts): slower than the rest speed, pressed there by the host's acceleration, and
+  /// on the side of the bed if there is one.
+  bool rests(double leaving_m_s, double normal_z_from_support, const HostState& host, double t_s) const;
   /// What attach did.
   struct Attached {
     HostState host_after;            ///< the host's state after the sticking collision
     bool bed_deeper;                 ///< beyond the depth the guards assumed: predict all anew
     Eigen::Vector3d lab_position_m;  ///< where the sphere came to rest
   };
-  /// Free sphere i (its record at t_s) comes to rest on the bed on `side`: a perfectly
-  /// inelastic, sticking collision with the host (the normal loss booked as impact, the
-  /// sliding and spinning that stop as friction), after which it rides as added mass.
-  /// The host must then restart from `host_after`.
-  Attached attach(int i, int side, double t_s);
+  /// Free sphere i (its record at t_s) comes to rest on the bed on `side`, on rider
+  /// `support` (−1: on its cap), at contact with it: a perfectly inelastic, sticking
+  /// collision with the host in state `host` (the normal loss booked as impact, the
+  /// sliding and spinning that stop as friction), after which it rides as added mass. The
+  /// host must then restart from `host_after`: once for a collision and the sticking that
+  /// ends it, so that the two move the host one way (restart).
+  Attached attach(int i, int side, int support, const HostState& host, double t_s);
   /// Riding sphere i leaves the bed at t_s with the host's velocity (`host`, now; no
   /// momentum changes hands) and becomes free, without predictions yet; the host must
   /// then restart with the riding mass that is left (before the next event).
@@ -199,11 +202,24 @@ class HostCoupling {
     SearchBox searched;
   };
 
+  /// How a restart's trajectory departs from the one it replaces: by d(s) after s, with
+  /// |d(s)| ≤ velocity·s + ½ acceleration·s², all in `direction` (+1 up, −1 down; 0: not
+  /// surely one way) until `until_s`.
+  struct Departure {
+    int direction;
+    double velocity_m_s, acceleration_m_s2;
+    double until_s;
+  };
+  /// The departure of a restart from `start` at t_s, the old trajectory (still
+  /// trajectory_) then at `old`, and the riding mass changed from the one it was built with.
+  Departure departure(const HostState& old, const HostState& start, double t_s) const;
   void sweep_tier(std::size_t level, double t_s);
-  /// After a host impulse at t_s that changed the host's velocity by `velocity_change_m_s`
-  /// and not its riding mass: whether touching sphere i's prediction still stands (see
-  /// TouchingBound).
-  bool defer_touching(int i, double velocity_change_m_s, double t_s);
+  /// After a restart at t_s that departs from the old trajectory as `departure` says:
+  /// whether touching sphere i's prediction still stands (see TouchingBound).
+  bool defer_touching(int i, const Departure& departure, double t_s);
+  /// Whether a rider left since the last restart from the box touching sphere i's last
+  /// prediction searched (its event may be a collision with it).
+  bool departed_from_box(int i, double t_s) const;
   /// The bound of touching sphere i's exact prediction at t_s, which ends at `until_s`.
   TouchingBound touching_bound(int i, double until_s, double t_s) const;
   /// Calls visit(j) for each rider j in the cells that cover the host-frame box centre ± half.
@@ -218,7 +234,7 @@ class HostCoupling {
   /// (with margin 0 it reaches touching_slack_m_ farther in z than the path needs).
   HostContact host_contact(int i, double end_s, double margin_m, double t_s,
                            std::vector<int>* riders_searched = nullptr) const;
-  bool presses(double normal_z_from_support, double t_s) const;
+  bool presses(double normal_z_from_support, const HostState& host, double t_s) const;
 
   FreeFlight& flight_;
   HardLedger& ledger_;
@@ -247,8 +263,8 @@ class HostCoupling {
   int bed_side_ = 0;
   double bed_depth_bound_m_ = 0;  ///< riders never reach farther from their cap than this
   CellMembers rider_cells_;       ///< riding spheres by host-frame cell (the free cells' geometry)
-  /// Where the riders detached since the last restart were (lab frame): a prescribed host's
-  /// restart predicts anew only the spheres near them. Empty between events.
+  /// Where the riders detached since the last restart were (lab frame): a restart predicts
+  /// anew the spheres whose predictions may meet them. Empty between events.
   std::vector<Eigen::Vector3d> departed_m_;
 
   // The tiers.

@@ -1,8 +1,10 @@
 #include <doctest/doctest.h>
 
 #include <array>
+#include <cmath>
 #include <random>
 #include <set>
+#include <utility>
 
 #include "pdamp/model/cavity.hpp"
 #include "pdamp/model/cell_grid.hpp"
@@ -38,6 +40,61 @@ TEST_CASE("cells are at least as large as asked and tile the cross-section") {
   CHECK(std::set<int>(cells.begin(), cells.begin() + n).size() == 27);
   // At a corner of the cross-section only 2 x 2 x 3 cells exist.
   CHECK(grid.neighbours(grid.coord_of({-0.0049, -0.0049, 0.01}), cells) == 12);
+}
+
+TEST_CASE("a box's cells cover every point of it as coord_of places it, and at most a cell more at an end") {
+  // Cells of 1/300 m, where some heights an ulp from a face are in one layer by
+  // division and in the next by the inverse.
+  const CellGrid grid(0.005, 0.012, 0.003);
+  const auto within = [](const CellCoord& c, const CellGrid::Cover& cover) {
+    return cover.low.ix <= c.ix && c.ix <= cover.high.ix && cover.low.iy <= c.iy && c.iy <= cover.high.iy &&
+           cover.low.iz <= c.iz && c.iz <= cover.high.iz;
+  };
+  const auto tight = [&](const Eigen::Vector3d& low, const Eigen::Vector3d& high, const CellGrid::Cover& cover) {
+    const CellCoord a = grid.coord_of(low), b = grid.coord_of(high);
+    return cover.low.ix >= a.ix - 1 && cover.low.iy >= a.iy - 1 && cover.low.iz >= a.iz - 1 &&
+           cover.high.ix <= b.ix + 1 && cover.high.iy <= b.iy + 1 && cover.high.iz <= b.iz + 1;
+  };
+  // Corners on the cells' faces and a few ulps either side, where a product by the
+  // inverse and a quotient can round to different sides of a whole number.
+  int checked = 0, failed = 0, rounded_apart = 0;
+  for (int k = 0; k <= 40; ++k) {
+    for (int step = -3; step <= 3; ++step) {
+      double x = grid.x_lower_m(k % (grid.nx() + 1)), z = grid.z_lower_m(k);
+      for (int n = 0; n < std::abs(step); ++n) {
+        x = std::nextafter(x, step > 0 ? 1.0 : -1.0);
+        z = std::nextafter(z, step > 0 ? 1.0 : -1.0);
+      }
+      const Eigen::Vector3d corner(x, x, z);
+      rounded_apart += std::floor(z / grid.cell_size_m()) != std::floor(z * (1.0 / grid.cell_size_m()));
+      const Eigen::Vector3d reach = Eigen::Vector3d::Constant(3e-4);
+      using Box = std::pair<Eigen::Vector3d, Eigen::Vector3d>;
+      for (const auto& [low, high] : {Box{corner, corner}, Box{corner - reach, corner}, Box{corner, corner + reach}}) {
+        const CellGrid::Cover cover = grid.cover(low, high);
+        failed += !within(grid.coord_of(low), cover) || !within(grid.coord_of(high), cover) || !tight(low, high, cover);
+        ++checked;
+      }
+    }
+  }
+  CHECK(rounded_apart > 0);
+  CHECK(failed == 0);
+  // Random boxes and points in them.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> across(-0.006, 0.006), up(-0.002, 0.014), size(0.0, 0.003);
+  for (int k = 0; k < 2000; ++k) {
+    const Eigen::Vector3d low(across(rng), across(rng), up(rng));
+    const Eigen::Vector3d high = low + Eigen::Vector3d(size(rng), size(rng), size(rng));
+    const CellGrid::Cover cover = grid.cover(low, high);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int j = 0; j < 4; ++j) {
+      const Eigen::Vector3d p = low + (high - low).cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+      failed += !within(grid.coord_of(p), cover);
+    }
+    failed += !within(grid.coord_of(low), cover) || !within(grid.coord_of(high), cover) || !tight(low, high, cover);
+    ++checked;
+  }
+  CHECK(failed == 0);
+  CHECK(checked > 2000);
 }
 
 TEST_CASE("a cell's block is its 27 neighbours, wrapped in z, with a stand-in beyond the sides") {

@@ -51,7 +51,8 @@ HostCoupling::HostCoupling(const Scenario& scenario, const Particles& initial, F
       touching_(static_cast<int>(initial.size())),
       touching_bound_(initial.size()),
       touching_slack_m_(0.01 * initial.radius_m.minCoeff()),
-      searched_(initial.size()) {}
+      searched_(initial.size()),
+      top_rider_layer_(static_cast<int>(std::floor(cavity_.height_m() / flight.grid().cell_size_m()))) {}
 
 // ---------------------------------------------------------------------------------------------
 // The host's motion
@@ -324,10 +325,9 @@ void HostCoupling::for_each_rider_in(const Eigen::Vector3d& centre_m, const Eige
                                      Visit visit) const {
   // The cells that cover the box (a rider's centre outside them is outside it).
   const CellGrid& grid = flight_.grid();
-  const CellCoord low = grid.coord_of(centre_m - half_m), high = grid.coord_of(centre_m + half_m);
+  const auto [low, high] = grid.cover(centre_m - half_m, centre_m + half_m);
   // Host-frame layers lie within the grid's first period: no wrap, no division per cell.
-  const int top_layer = static_cast<int>(std::floor(cavity_.height_m() / grid.cell_size_m()));
-  for (int iz = std::max(0, low.iz); iz <= std::min(top_layer, high.iz); ++iz) {
+  for (int iz = std::max(0, low.iz); iz <= std::min(top_rider_layer_, high.iz); ++iz) {
     for (int iy = low.iy; iy <= high.iy; ++iy) {
       for (int ix = low.ix; ix <= high.ix; ++ix) rider_cells_.for_each_in(grid.index_in_period({ix, iy, iz}), visit);
     }

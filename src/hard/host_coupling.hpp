@@ -280,6 +280,7 @@ class HostCoupling {
   /// Each near sphere's box of its last prediction: a rider that comes or goes outside it
   /// leaves the prediction standing (repredict_near_around).
   std::vector<SearchBox> searched_;
+  int top_rider_layer_;  ///< the highest layer a rider's host-frame centre can be in
 };
 
 }  // namespace pdamp::hard

@@ -39,6 +39,7 @@ CellGrid::CellGrid(double cavity_radius_m, double cavity_height_m, double min_ce
   const Tiling t(cavity_radius_m, min_cell_size_m);
   n_xy_ = static_cast<int>(t.across);
   cell_m_ = t.cell_m;
+  inverse_cell_1_m_ = 1.0 / cell_m_;
   n_z_ = static_cast<int>(t.layers(cavity_height_m));
   int k = 0;
   for (int dz = -1; dz <= 1; ++dz) {

@@ -41,6 +41,13 @@ class CellGrid {
   int cell_count() const { return n_xy_ * n_xy_ * n_z_; }
 
   CellCoord coord_of(const Eigen::Vector3d& p) const;
+  /// Cells from `low` to `high` (each coordinate) that cover the box between two corners:
+  /// every point of it lies in one of them, as coord_of places it. Perhaps a cell more at
+  /// an end; by multiplication, cheaper than coord_of's division.
+  struct Cover {
+    CellCoord low, high;
+  };
+  Cover cover(const Eigen::Vector3d& low_m, const Eigen::Vector3d& high_m) const;
   int index(const CellCoord& c) const;
   /// index(c) for a layer within the first period (0 ≤ iz < nz), without wrapping it.
   int index_in_period(const CellCoord& c) const { return (c.iz * n_xy_ + c.iy) * n_xy_ + c.ix; }
@@ -59,9 +66,19 @@ class CellGrid {
 
  private:
   int clamp_xy(double coordinate) const;
+  /// A cell index in x or y from its unclamped quotient (floored), as clamp_xy clamps it.
+  int clamp_cell(double cell) const {
+    return cell > 0.0 ? (cell < n_xy_ - 1 ? static_cast<int>(cell) : n_xy_ - 1) : 0;  // NaN: 0
+  }
+  /// A layer index from its unclamped quotient (floored), as coord_of bounds it.
+  static int clamp_layer(double layer) {
+    constexpr double farthest_layer = 1 << 30;  // any layer index wraps to one of the grid's
+    return layer > -farthest_layer ? (layer < farthest_layer ? static_cast<int>(layer) : 1 << 30) : -(1 << 30);
+  }
 
   double half_width_m_;
   double cell_m_;
+  double inverse_cell_1_m_;  ///< 1 / cell_m_
   int n_xy_;
   int n_z_;
   std::array<int, 27> block_offsets_;  ///< of the 27 cells of a block from its middle, where none wraps or is outside
@@ -71,15 +88,26 @@ class CellGrid {
 // not a number, or far off, still gives a cell of the grid: the engines stop on such a
 // state, and nothing may read memory before they do.
 inline int CellGrid::clamp_xy(double coordinate) const {
-  const double cell = std::floor((coordinate + half_width_m_) / cell_m_);
-  return cell > 0.0 ? (cell < n_xy_ - 1 ? static_cast<int>(cell) : n_xy_ - 1) : 0;  // NaN: 0
+  return clamp_cell(std::floor((coordinate + half_width_m_) / cell_m_));
 }
 
 inline CellCoord CellGrid::coord_of(const Eigen::Vector3d& p) const {
-  constexpr double farthest_layer = 1 << 30;  // any layer index wraps to one of the grid's
-  const double layer = std::floor(p.z() / cell_m_);
-  const int iz = layer > -farthest_layer ? (layer < farthest_layer ? static_cast<int>(layer) : 1 << 30) : -(1 << 30);
-  return {clamp_xy(p.x()), clamp_xy(p.y()), iz};
+  return {clamp_xy(p.x()), clamp_xy(p.y()), clamp_layer(std::floor(p.z() / cell_m_))};
+}
+
+inline CellGrid::Cover CellGrid::cover(const Eigen::Vector3d& low_m, const Eigen::Vector3d& high_m) const {
+  // A product by the inverse is within some 10⁻¹⁴ of a cell of the quotient (grids hold at
+  // most 2²⁴ cells): moving each end 10⁻⁹ of a cell outwards keeps every cell coord_of
+  // gives a point of the box.
+  constexpr double slack = 1e-9;
+  const auto across = [&](double x, double outwards) {
+    return clamp_cell(std::floor((x + half_width_m_) * inverse_cell_1_m_ + outwards));
+  };
+  const auto layer = [&](double z, double outwards) {
+    return clamp_layer(std::floor(z * inverse_cell_1_m_ + outwards));
+  };
+  return {{across(low_m.x(), -slack), across(low_m.y(), -slack), layer(low_m.z(), -slack)},
+          {across(high_m.x(), slack), across(high_m.y(), slack), layer(high_m.z(), slack)}};
 }
 
 inline int CellGrid::index(const CellCoord& c) const {

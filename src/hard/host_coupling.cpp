@@ -113,8 +113,8 @@ HostCoupling::Departure HostCoupling::departure(const HostState& old, const Host
   // force keeps the sign of Δv, which it does while |z_old''(u) − z_old''(t)| stays below
   // |g_z − z_old''(t)|, at least until the old trajectory's jerk bound lets it cross. A
   // sphere coming to rest pulls the host towards it while its weight pushes the host
-  // away, so a collision and the sticking that ends it restart the host once (attach):
-  // together, the host gives way.
+  // away, so a collision and the sticking that ends it restart the host once
+  // (HardEngine::rest_if_slow): together, the host gives way.
   const double velocity_change = start.v_m_s - old.v_m_s;
   const double mass_change = riding_mass_kg_ - trajectory_riding_mass_kg_;
   const double relative_gravity = gravity_m_s2_.z() - trajectory_.acceleration_m_s2(t_s, old);

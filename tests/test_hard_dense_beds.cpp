@@ -130,3 +130,122 @@ TEST_CASE("TC model: a collision within the window of the sphere's last one is e
   // A window of one t_c holds no bounce of this ball: the TC model changes nothing here.
   CHECK(ball_impact_loss_J(1.0, 0.1) == ball_impact_loss_J(0.0, 0.1));
 }
+
+TEST_CASE("TC rest: the enduring speed is where a flight of 2v/a lasts the window's soft contact times") {
+  for (const double mass_kg : {4.7e-6, 1.0e-5}) {
+    for (const double kn : {3e5, 3.6e5}) {
+      for (const double a : {9.81, 400.0, 1.2e4}) {
+        for (const double window : {0.5, 1.0, 10.0}) {
+          CAPTURE(mass_kg);
+          CAPTURE(a);
+          CAPTURE(window);
+          const double v = hertz_enduring_speed_m_s(mass_kg, kn, a, window);
+          CHECK(2 * v / a == doctest::Approx(window * hertz_contact_time_s(mass_kg, kn, v)).epsilon(1e-12));
+        }
+      }
+    }
+  }
+  // Nothing presses, or no window: nothing endures.
+  CHECK(hertz_enduring_speed_m_s(1e-5, 3e5, 0.0, 1.0) == 0.0);
+  CHECK(hertz_enduring_speed_m_s(1e-5, 3e5, -9.81, 1.0) == 0.0);
+  CHECK(hertz_enduring_speed_m_s(1e-5, 3e5, 9.81, 0.0) == 0.0);
+}
+
+namespace {
+
+/// What a ball of 1 mm dropped from 5 mm onto the fixed floor of a wall law with e_n = 0.5
+/// did in 0.3 s with the rest window `rest_tc_window`.
+struct DroppedBall {
+  double mass_kg, kn_N_m1_5, rest_speed_m_s;
+  std::int64_t impacts, rests;
+  double impact_J, kinetic_J;
+};
+
+DroppedBall dropped_ball(double rest_tc_window) {
+  Scenario s = test::fixed_walls(
+      "[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 1\n"
+      "[hard_wall]\nen = 0.5\nbeta0 = 0\n");
+  s.hard_resting.rest_tc_window = rest_tc_window;
+  const Particles ball = test::spheres({{0.0, 0.0, 0.0055}}, {{0.0, 0.0, 0.0}}, 0.0005);
+  HardEngine engine(s, ball);
+  engine.advance_to(0.3);
+  const auto energy = engine.observe().energy;
+  return {ball.mass_kg[0],
+          s.soft_wall.kn_N_m1_5,
+          s.hard_resting.rest_speed_m_s,
+          test::statistic(engine, "events_cap"),
+          test::statistic(engine, "bed_rests"),
+          energy.dissipated_impact_J,
+          energy.particle_translational_J + energy.particle_rotational_J};
+}
+
+}  // namespace
+
+TEST_CASE("TC rest: a ball rests at the first bounce that would land again within the window, and loses all") {
+  // Leaving the floor at v_k = 0.5^k sqrt(2 g h): 0.157, 0.078, 0.039 … m/s, each flight
+  // 2 v_k / g. The soft wall law's contact at v lasts t_c(v) ≈ 0.14 ms (v / 1 m/s)^(−1/5).
+  const DroppedBall plain = dropped_ball(0.0);
+  const double v0 = std::sqrt(2 * 9.81 * 0.005);
+  // Off: it bounces until it leaves slower than the rest speed (5 mm/s): v_6 = 4.9 mm/s.
+  REQUIRE(plain.rest_speed_m_s == 0.005);
+  CHECK(plain.impacts == 6);
+  CHECK(plain.rests == 1);
+  // A window of 100 t_c: the first bounce (32 ms against 100 t_c(0.157 m/s) = 20.6 ms) flies,
+  // the second (16 ms against 23.6 ms) does not: it rests at its second impact.
+  const double window = 100;
+  const double tc_1 = hertz_contact_time_s(plain.mass_kg, plain.kn_N_m1_5, 1.0);
+  REQUIRE(2 * 0.5 * v0 / 9.81 > window * tc_1 * std::pow(0.5 * v0, -0.2));
+  REQUIRE(2 * 0.25 * v0 / 9.81 < window * tc_1 * std::pow(0.25 * v0, -0.2));
+  const DroppedBall tc = dropped_ball(window);
+  CHECK(tc.impacts == 2);
+  CHECK(tc.rests == 1);
+  // Resting, it has lost all it had by impact: m g h, to the ledger's accuracy, as without.
+  CHECK(tc.impact_J == doctest::Approx(plain.mass_kg * 9.81 * 0.005).epsilon(1e-9));
+  CHECK(tc.kinetic_J == 0.0);
+  CHECK(plain.impact_J == doctest::Approx(tc.impact_J).epsilon(1e-9));
+  // One t_c at 1 g holds none of these bounces (below the rest speed either way): the same bits.
+  CHECK(hertz_enduring_speed_m_s(plain.mass_kg, plain.kn_N_m1_5, 9.81, 1.0) < 0.005);
+  const DroppedBall one = dropped_ball(1.0);
+  CHECK(one.impact_J == plain.impact_J);
+  CHECK(one.impacts == 6);
+}
+
+namespace {
+
+/// Two 1 mm balls on a fixed floor at 1 g with the rest window `rest_tc_window`: the lower
+/// one dropped from 0.1 mm comes to rest first, then the upper one lands on it at 0.31 m/s.
+struct StackedBalls {
+  std::int64_t rests, knock_offs;
+  double dissipated_J, expected_J, kinetic_J;
+};
+
+StackedBalls stacked_balls(double rest_tc_window) {
+  Scenario s = test::fixed_walls(
+      "[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 2\n"
+      "[hard_wall]\nen = 0.5\nbeta0 = 0\n[hard]\nbeta0 = 0\n");
+  s.hard_resting.rest_tc_window = rest_tc_window;
+  const double r_m = 0.0005, low_drop_m = 1e-4, high_drop_m = 0.005;
+  const Particles balls = test::spheres({{0.0, 0.0, r_m + low_drop_m}, {0.0, 0.0, 3 * r_m + high_drop_m}},
+                                        {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}}, r_m);
+  HardEngine engine(s, balls);
+  engine.advance_to(0.3);
+  const auto energy = engine.observe().energy;
+  return {test::statistic(engine, "bed_rests"), test::statistic(engine, "bed_knock_offs"),
+          energy.dissipated_impact_J + energy.dissipated_friction_J,
+          balls.mass_kg[0] * 9.81 * (low_drop_m + high_drop_m),
+          energy.particle_translational_J + energy.particle_rotational_J};
+}
+
+}  // namespace
+
+TEST_CASE("TC rest: a rider hit slower than the speed at which it would rest stays on the bed") {
+  // Without a window the upper ball, at 0.31 m/s, knocks the lower one off its floor.
+  CHECK(stacked_balls(0.0).knock_offs > 0);
+  // With 10⁴ contact times the soft law would hold both against 1 g below ~4 m/s: the lower
+  // ball stays, the upper one rests on it at once, and all of their fall is dissipated.
+  const StackedBalls held = stacked_balls(1e4);
+  CHECK(held.knock_offs == 0);
+  CHECK(held.rests == 2);
+  CHECK(held.kinetic_J == 0.0);
+  CHECK(held.dissipated_J == doctest::Approx(held.expected_J).epsilon(1e-9));
+}

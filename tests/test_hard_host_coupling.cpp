@@ -13,6 +13,7 @@
 #include "hard/free_flight.hpp"
 #include "hard/hard_ledger.hpp"
 #include "hard/host_coupling.hpp"
+#include "pdamp/model/hertz_contact.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;
@@ -128,7 +129,7 @@ TEST_CASE("riders: a sphere comes to rest on the floor of a free host, which tak
   p.angular_velocity_rad_s.col(0) = Eigen::Vector3d(3, 1, -2);
   const double m = p.mass_kg[0], host_mass = s.host.mass_kg;
   const double vz = 0.19, host_v = 0.2;
-  REQUIRE(parts.host.rests(vz - host_v, 1.0, parts.host.now(0.0), 0.0));
+  REQUIRE(parts.host.rests(0, -1, vz - host_v, 1.0, parts.host.now(0.0), 0.0));
   const HostCoupling::Attached attached = parts.host.attach(0, 1, -1, parts.host.now(0.0), 0.0);
   CHECK(parts.host.riding_count() == 1);
   CHECK(parts.flight.sphere(0).riding == 1);
@@ -173,16 +174,56 @@ TEST_CASE(
   Parts parts(s, test::spheres({Eigen::Vector3d(0.003, 0, r_m), Eigen::Vector3d(-0.003, 0, 0.005)},
                                {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, r_m));
   const double rest = s.hard_resting.rest_speed_m_s;
-  CHECK(parts.host.rests(0.5 * rest, 1.0, parts.host.now(0.0), 0.0));
-  CHECK_FALSE(parts.host.rests(2.0 * rest, 1.0, parts.host.now(0.0), 0.0));
-  CHECK_FALSE(
-      parts.host.rests(0.5 * rest, 1.0, parts.host.now(0.25 / f_hz), 0.25 / f_hz));  // the floor falls away at 2 g
-  CHECK_FALSE(parts.host.rests(0.5 * rest, -1.0, parts.host.now(0.0), 0.0));         // gravity pulls it off the top cap
-  CHECK(parts.host.rests(0.5 * rest, -1.0, parts.host.now(0.25 / f_hz), 0.25 / f_hz));  // the top cap comes down at 2 g
+  const double quarter = 0.25 / f_hz;
+  const HostState still = parts.host.now(0.0), falling = parts.host.now(quarter);
+  CHECK(parts.host.rests(0, -1, 0.5 * rest, 1.0, still, 0.0));
+  CHECK_FALSE(parts.host.rests(0, -1, 2.0 * rest, 1.0, still, 0.0));
+  CHECK_FALSE(parts.host.rests(0, -1, 0.5 * rest, 1.0, falling, quarter));  // the floor falls away at 2 g
+  CHECK_FALSE(parts.host.rests(0, -1, 0.5 * rest, -1.0, still, 0.0));       // gravity pulls it off the top cap
+  CHECK(parts.host.rests(0, -1, 0.5 * rest, -1.0, falling, quarter));       // the top cap comes down at 2 g
   // With a bed on the floor, the top cap holds none.
   const HostCoupling::Attached attached = parts.host.attach(0, 1, -1, parts.host.now(0.0), 0.0);
   CHECK(attached.host_after.v_m_s == parts.host.trajectory().at(0.0).v_m_s);  // a prescribed host keeps its motion
-  CHECK_FALSE(parts.host.rests(0.5 * rest, -1.0, parts.host.now(0.25 / f_hz), 0.25 / f_hz));
+  CHECK_FALSE(parts.host.rests(0, -1, 0.5 * rest, -1.0, parts.host.now(quarter), quarter));
+}
+
+TEST_CASE("riders: with a rest window, a sphere rests below the soft law's enduring speed under the pressing") {
+  // The floor moves as z = A sin(ωt) with A ω² = 2 g: a quarter period on the top cap
+  // presses at g, three quarters on the floor at 3 g.
+  constexpr double f_hz = 30.0, w = 2 * std::numbers::pi * f_hz, g = 9.81;
+  Scenario s = test::scenario_from(
+      "[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 30\n"
+      "[cavity]\ndiameter_m = 0.02\nheight_m = 0.01\n[particles]\ncount = 2\ndiameter_m = 0.001\n"
+      "[hard]\nrest_tc_window = 50\n[soft_wall]\nkn_N_m1_5 = 7.2e5\n");
+  s.excitation.amplitude_m = 2 * g / (w * w);
+  REQUIRE(s.soft_particle.kn_N_m1_5 != s.soft_wall.kn_N_m1_5);
+  Parts parts(s, test::spheres({Eigen::Vector3d(0.003, 0, r_m), Eigen::Vector3d(-0.003, 0, 0.005)},
+                               {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, r_m));
+  const double m = parts.flight.particles().mass_kg[0], rest = s.hard_resting.rest_speed_m_s;
+  const double quarter = 0.25 / f_hz, three_quarters = 0.75 / f_hz;
+  const auto rest_speed = [&](int i, int support, double normal_z, double t) {
+    return parts.host.rest_speed_m_s(i, support, normal_z, parts.host.now(t), t);
+  };
+  // On a cap: the sphere's own mass against the wall law.
+  const double on_floor = hertz_enduring_speed_m_s(m, s.soft_wall.kn_N_m1_5, 3 * g, 50);
+  REQUIRE(on_floor > 10 * rest);
+  CHECK(rest_speed(0, -1, 1.0, three_quarters) == doctest::Approx(on_floor).epsilon(1e-12));
+  CHECK(rest_speed(0, -1, -1.0, quarter) ==
+        doctest::Approx(hertz_enduring_speed_m_s(m, s.soft_wall.kn_N_m1_5, g, 50)).epsilon(1e-12));
+  // Where nothing presses, the rest speed alone.
+  CHECK(rest_speed(0, -1, -1.0, three_quarters) == rest);
+  CHECK(rest_speed(0, -1, 1.0, quarter) == rest);
+  CHECK(parts.host.rests(0, -1, 0.9 * on_floor, 1.0, parts.host.now(three_quarters), three_quarters));
+  CHECK_FALSE(parts.host.rests(0, -1, 1.1 * on_floor, 1.0, parts.host.now(three_quarters), three_quarters));
+  // On a rider: the pair's reduced mass against the sphere law, along the normal's share of the pressing.
+  parts.host.attach(0, 1, -1, parts.host.now(0.0), 0.0);
+  CHECK(rest_speed(1, 0, 0.6, three_quarters) ==
+        doctest::Approx(hertz_enduring_speed_m_s(0.5 * m, s.soft_particle.kn_N_m1_5, 0.6 * 3 * g, 50)).epsilon(1e-12));
+  // Without a window, the rest speed whatever presses.
+  s.hard_resting.rest_tc_window = 0;
+  Parts plain(s, test::spheres({Eigen::Vector3d(0.003, 0, r_m), Eigen::Vector3d(-0.003, 0, 0.005)},
+                               {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}, r_m));
+  CHECK(plain.host.rest_speed_m_s(0, -1, 1.0, plain.host.now(three_quarters), three_quarters) == rest);
 }
 
 TEST_CASE(
@@ -355,7 +396,7 @@ TEST_CASE(
     const HardStatistics before = parts.ledger.counts;
     HostState collided = parts.host.now(0.0);
     collided.v_m_s += c.collision_m_s;
-    REQUIRE(parts.host.rests(c.leaving_m_s, 1.0, collided, 0.0));
+    REQUIRE(parts.host.rests(0, -1, c.leaving_m_s, 1.0, collided, 0.0));
     const HostCoupling::Attached attached = parts.host.attach(0, 1, -1, collided, 0.0);
     REQUIRE(parts.host.restart(attached.host_after, 0.0));
     CHECK(parts.ledger.counts.touching_deferrals - before.touching_deferrals == (c.one_way ? 1 : 0));

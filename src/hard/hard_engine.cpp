@@ -23,7 +23,6 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
       jams_(static_cast<int>(initial.size())),
       clusters_(static_cast<int>(initial.size()), scenario.hard_resting.cluster_speed_m_s),
       laws_(scenario, calibration),
-      rest_speed_m_s_(scenario.hard_resting.rest_speed_m_s),
       // A collision cascade through a touching bed can take a few events per contact at
       // one instant; far more than that means no progress.
       stall_limit_(1000 * static_cast<std::int64_t>(initial.size()) + 100000),
@@ -456,7 +455,9 @@ void HardEngine::collide_rider(int i, int j) {
   const double approach = -dx.dot(dv) / dx.norm();
   const Eigen::Vector3d u = dv + (ri * particles.angular_velocity_rad_s.col(i)).cross(n);
   const bool jammed = jams_.note_collision(i, -1, t_s_, JamResolver::held_by_cap_or_bed);
-  if (jammed && approach <= rest_speed_m_s_) {
+  // How slowly it must come to stay on the rider: as slowly as it would rest there.
+  const double rest_speed = host_.rest_speed_m_s(i, j, -n.z(), host, t_s_);
+  if (jammed && approach <= rest_speed) {
     // Wedged among riders and still colliding at this one instant: friction can turn the
     // slip along one contact into approach towards the next for ever. The sphere is
     // jammed in the bed, so it comes to rest in it.
@@ -464,7 +465,7 @@ void HardEngine::collide_rider(int i, int j) {
     attach(i, host_.bed_side(), j, host);
     return;
   }
-  if (approach > rest_speed_m_s_) {
+  if (approach > rest_speed) {
     // Hit hard enough to knock the rider off: it leaves the bed with the host's velocity
     // (no momentum changes hands) and the collision is between two free spheres.
     ++books_.counts.knocked_off;
@@ -491,7 +492,7 @@ void HardEngine::restart_host(HostState start) {
 void HardEngine::rest_if_slow(int i, const Eigen::Vector3d& normal_from_support, int support, const HostState& before,
                               const HostState& after) {
   const double leaving = (flight_.particles().velocity_m_s.col(i) - after.v_m_s * e_z).dot(normal_from_support);
-  if (host_.rests(leaving, normal_from_support.z(), after, t_s_)) {
+  if (host_.rests(i, support, leaving, normal_from_support.z(), after, t_s_)) {
     attach(i, normal_from_support.z() > 0 ? 1 : -1, support, after);
     return;
   }

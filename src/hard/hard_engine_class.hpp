@@ -159,7 +159,6 @@ class HardEngine final : public Engine {
   JamResolver jams_;
   RigidClusters clusters_;
   ContactLaws laws_;
-  double rest_speed_m_s_;
   double t_s_ = 0.0;
   double separation_m_ = 0.0;  ///< how far the initial spheres were moved apart
   std::int64_t events_at_this_instant_ = 0;

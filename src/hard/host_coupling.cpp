@@ -4,6 +4,8 @@
 #include <cmath>
 #include <tuple>
 
+#include "pdamp/model/hertz_contact.hpp"
+
 namespace pdamp::hard {
 
 namespace {
@@ -44,6 +46,9 @@ HostCoupling::HostCoupling(const Scenario& scenario, const Particles& initial, F
       model_(scenario),
       fastest_rate_1_s_(std::max(model_.angular_frequency_rad_s(), model_.natural_angular_frequency_rad_s())),
       rest_speed_m_s_(scenario.hard_resting.rest_speed_m_s),
+      rest_tc_window_(scenario.hard_resting.rest_tc_window),
+      sphere_kn_N_m1_5_(scenario.soft_particle.kn_N_m1_5),
+      wall_kn_N_m1_5_(scenario.soft_wall.kn_N_m1_5),
       trajectory_(model_, 0.0, model_.initial_state()),
       speed_envelope_m_s_(2.0 * trajectory_.speed_bound_m_s()),
       rider_cells_(flight.grid().cell_count(), static_cast<int>(initial.size())),
@@ -143,10 +148,26 @@ bool HostCoupling::presses(double normal_z_from_support, const HostState& host, 
 // ---------------------------------------------------------------------------------------------
 // The resting bed
 
-bool HostCoupling::rests(double leaving_m_s, double normal_z_from_support, const HostState& host, double t_s) const {
+bool HostCoupling::rests(int i, int support, double leaving_m_s, double normal_z_from_support, const HostState& host,
+                         double t_s) const {
   const int side = normal_z_from_support > 0 ? 1 : -1;
-  return leaving_m_s < rest_speed_m_s_ && presses(normal_z_from_support, host, t_s) &&
-         (riding_count_ == 0 || bed_side_ == side);
+  const bool slow =
+      leaving_m_s < rest_speed_m_s_ ||
+      (rest_tc_window_ > 0.0 && leaving_m_s < rest_speed_m_s(i, support, normal_z_from_support, host, t_s));
+  return slow && presses(normal_z_from_support, host, t_s) && (riding_count_ == 0 || bed_side_ == side);
+}
+
+double HostCoupling::rest_speed_m_s(int i, int support, double normal_z_from_support, const HostState& host,
+                                    double t_s) const {
+  if (rest_tc_window_ == 0.0) return rest_speed_m_s_;
+  // The pressing acceleration along the normal: the relative gravity g − z_h'' into the support.
+  const double pressing = -normal_z_from_support * (gravity_m_s2_.z() - trajectory_.acceleration_m_s2(t_s, host));
+  const PackedParticles& particles = flight_.particles();
+  const double m = particles.mass_kg[i];
+  const double effective_mass = support < 0 ? m : m * particles.mass_kg[support] / (m + particles.mass_kg[support]);
+  const double enduring = hertz_enduring_speed_m_s(effective_mass, support < 0 ? wall_kn_N_m1_5_ : sphere_kn_N_m1_5_,
+                                                   pressing, rest_tc_window_);
+  return std::max(rest_speed_m_s_, enduring);
 }
 
 HostCoupling::Attached HostCoupling::attach(int i, int side, int support, const HostState& host, double t_s) {

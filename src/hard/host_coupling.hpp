@@ -26,10 +26,11 @@
 ///   (TouchingBound).
 ///
 /// Resting: a sphere that leaves the floor, the top cap or a riding sphere slower than
-/// hard.rest_speed_m_s while the host's acceleration presses it there stops and rides
-/// with the host as added mass (no events at all; `attach`) until the host's
-/// acceleration stops pressing (the whole bed is released: a `bed_release` event) or a
-/// sphere hits it faster than that speed (`detach`).
+/// the rest speed (hard.rest_speed_m_s; with hard.rest_tc_window, also slower than it
+/// would have to be to land again within that many soft contact times) while the host's
+/// acceleration presses it there stops and rides with the host as added mass (no events
+/// at all; `attach`) until the host's acceleration stops pressing (the whole bed is
+/// released: a `bed_release` event) or a sphere hits it faster than that speed (`detach`).
 
 #include <array>
 #include <cstdint>
@@ -98,12 +99,18 @@ class HostCoupling {
   int riding_count() const { return riding_count_; }
   /// +1 riders rest on the bottom cap, −1 on the top cap.
   int bed_side() const { return bed_side_; }
-  /// Whether a free sphere leaving its support (the floor, the top cap or a rider; its
+  /// Whether free sphere i leaving its support (rider `support`, −1 a cap; the support's
   /// normal's z component `normal_z_from_support`) at `leaving_m_s` comes to rest there
   /// at t_s, the host then in state `host` (after the collision's impulse, before it
   /// restarts): slower than the rest speed, pressed there by the host's acceleration, and
   /// on the side of the bed if there is one.
-  bool rests(double leaving_m_s, double normal_z_from_support, const HostState& host, double t_s) const;
+  bool rests(int i, int support, double leaving_m_s, double normal_z_from_support, const HostState& host,
+             double t_s) const;
+  /// The rest speed of sphere i on rider `support` (−1 a cap) along a normal with z component
+  /// `normal_z_from_support` at t_s: hard.rest_speed_m_s, or with hard.rest_tc_window the
+  /// speed below which the host's pressing acceleration brings it back within that many soft
+  /// contact times, if that is faster (hertz_enduring_speed_m_s).
+  double rest_speed_m_s(int i, int support, double normal_z_from_support, const HostState& host, double t_s) const;
   /// What attach did.
   struct Attached {
     HostState host_after;            ///< the host's state after the sticking collision
@@ -244,6 +251,8 @@ class HostCoupling {
   HostModel model_;
   double fastest_rate_1_s_;
   double rest_speed_m_s_;
+  double rest_tc_window_;
+  double sphere_kn_N_m1_5_, wall_kn_N_m1_5_;  ///< the soft law's, for its contact times
 
   // The host.
   HostTrajectory trajectory_;

@@ -356,6 +356,11 @@ const std::vector<KeySpec>& key_specs() {
                  "a sphere leaving the floor, top cap or a resting sphere slower than this (relative to the host) "
                  "while the host's acceleration presses it there comes to rest and rides with the host",
                  number(PDAMP_FIELD(hard_resting.rest_speed_m_s), non_negative), ""});
+    k.push_back({"hard.rest_tc_window", text(d.hard_resting.rest_tc_window), "t_c",
+                 "a sphere that would land again on its support within this many soft contact times (Hertz, at "
+                 "its leaving speed, under the host's pressing acceleration) comes to rest too, and a rider hit "
+                 "that slowly stays on the bed; 0 = off (only rest_speed_m_s)",
+                 number(PDAMP_FIELD(hard_resting.rest_tc_window), non_negative), ""});
     k.push_back({"hard.elastic_speed_m_s", text(d.hard_resting.elastic_speed_m_s), "m/s",
                  "collisions with a normal approach speed below this are elastic (stops inelastic collapse)",
                  number(PDAMP_FIELD(hard_resting.elastic_speed_m_s), non_negative), ""});

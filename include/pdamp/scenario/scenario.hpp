@@ -87,6 +87,11 @@ struct HardRestingSettings {
   /// (normal speed relative to the host), while the host's acceleration presses it
   /// there, comes to rest and rides with the host as added mass.
   double rest_speed_m_s = 0.005;
+  /// Also faster than rest_speed_m_s: a sphere that would land again within this many soft
+  /// contact times (its flight 2 v / a under the pressing acceleration a, against the Hertz
+  /// contact of the soft law at v), which the soft law holds in one enduring contact, comes
+  /// to rest, and a rider hit slower than that stays on the bed; 0 turns it off.
+  double rest_tc_window = 0.0;
   /// Collisions whose normal approach speed is below this are elastic in the normal
   /// direction, which stops inelastic collapse (infinitely many collisions in finite time).
   double elastic_speed_m_s = 1e-4;

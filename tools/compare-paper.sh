@@ -7,7 +7,7 @@
 #     calibrated, over 20 Hz's whole second and the first 0.2 s of the others; the hard
 #     model alone (constant restitution) at 250 and 500 Hz, which the soft law cannot run;
 #   - Table 1 with the experiment's host damping, soft model.
-# A case that fails is stored as failed and the script goes on. Hours on one busy core.
+# A case that fails is stored as failed and the script goes on. About 8 minutes on one quiet core (2026-12-05).
 # Usage: tools/compare-paper.sh [--db FILE] [--threads N]
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

@@ -84,12 +84,14 @@ TEST_CASE("an empty scenario is the paper's Table 1 case") {
   CHECK(s.hard_resting.rest_speed_m_s == 0.005);
   CHECK(s.hard_resting.elastic_speed_m_s == 1e-4);
   CHECK(s.hard_resting.tc_window == 0.0);          // the TC model off
+  CHECK(s.hard_resting.rest_tc_window == 0.0);     // the rest window off
   CHECK(s.hard_resting.cluster_speed_m_s == 0.0);  // rigid clusters off
   // The Table 1 soft law's restitution at a 0.5 m/s impact, sphere-sphere and sphere-wall.
   CHECK(s.hard_particle.en == 0.71);
   CHECK(s.hard_wall.en == 0.80);
   CHECK(scenario_from("[hard]\nrest_speed_m_s = 0.002\n").hard_resting.rest_speed_m_s == 0.002);
   CHECK(scenario_from("[hard]\ncluster_speed_m_s = 0.01\n").hard_resting.cluster_speed_m_s == 0.01);
+  CHECK(scenario_from("[hard]\nrest_tc_window = 10\n").hard_resting.rest_tc_window == 10.0);
 }
 
 TEST_CASE("every key's documented default is what a scenario without keys resolves to, and a Scenario's own") {
@@ -153,6 +155,8 @@ TEST_CASE("bad values are rejected with the key, the value and what is valid") {
       {"[hard]\nrest_speed_m_s = -0.01\n", "hard.rest_speed_m_s", "'-0.01'", ">= 0"},
       {"[hard]\nelastic_speed_m_s = fast\n", "hard.elastic_speed_m_s", "'fast'", "not a finite number"},
       {"[hard]\ntc_window = -1\n", "hard.tc_window", "'-1'", ">= 0"},
+      {"[hard]\nrest_tc_window = -10\n", "hard.rest_tc_window", "'-10'", ">= 0"},
+      {"[hard]\nrest_tc_window = inf\n", "hard.rest_tc_window", "'inf'", "not a finite number"},
       {"[hard]\ncluster_speed_m_s = -0.01\n", "hard.cluster_speed_m_s", "'-0.01'", ">= 0"},
       {"[particles]\ncount = 2.5\n", "particles.count", "'2.5'", "whole number"},
       {"[particles]\nseed = -3\n", "particles.seed", "'-3'", "whole number"},

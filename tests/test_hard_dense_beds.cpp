@@ -1,6 +1,7 @@
 /// Dense beds on the hard engine: the opt-in diagnosis of where its collisions come from
 /// (EventDiagnosis: its decades, a bouncing ball whose intervals are known in closed form,
-/// and that asking for it changes no result), and the TC model (hard.tc_window).
+/// and that asking for it changes no result), the TC model (hard.tc_window), the rest window
+/// (hard.rest_tc_window) and the rest speed's floor at the elastic speed.
 #include <doctest/doctest.h>
 
 #include <cmath>
@@ -161,12 +162,15 @@ struct DroppedBall {
   double impact_J, kinetic_J;
 };
 
-DroppedBall dropped_ball(double rest_tc_window) {
+/// A 1 mm ball dropped from `drop_m` onto a fixed floor (e_n 0.5) at 1 g, for 0.3 s, with the
+/// resting settings `resting` (the defaults but for what is given).
+DroppedBall dropped_ball(const HardRestingSettings& resting, double drop_m = 0.005) {
   Scenario s = test::fixed_walls(
       "[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 1\n"
       "[hard_wall]\nen = 0.5\nbeta0 = 0\n");
-  s.hard_resting.rest_tc_window = rest_tc_window;
-  const Particles ball = test::spheres({{0.0, 0.0, 0.0055}}, {{0.0, 0.0, 0.0}}, 0.0005);
+  s.hard_resting = resting;
+  const double r_m = 0.0005;
+  const Particles ball = test::spheres({{0.0, 0.0, r_m + drop_m}}, {{0.0, 0.0, 0.0}}, r_m);
   HardEngine engine(s, ball);
   engine.advance_to(0.3);
   const auto energy = engine.observe().energy;
@@ -184,7 +188,7 @@ DroppedBall dropped_ball(double rest_tc_window) {
 TEST_CASE("TC rest: a ball rests at the first bounce that would land again within the window, and loses all") {
   // Leaving the floor at v_k = 0.5^k sqrt(2 g h): 0.157, 0.078, 0.039 … m/s, each flight
   // 2 v_k / g. The soft wall law's contact at v lasts t_c(v) ≈ 0.14 ms (v / 1 m/s)^(−1/5).
-  const DroppedBall plain = dropped_ball(0.0);
+  const DroppedBall plain = dropped_ball({});
   const double v0 = std::sqrt(2 * 9.81 * 0.005);
   // Off: it bounces until it leaves slower than the rest speed (5 mm/s): v_6 = 4.9 mm/s.
   REQUIRE(plain.rest_speed_m_s == 0.005);
@@ -196,7 +200,7 @@ TEST_CASE("TC rest: a ball rests at the first bounce that would land again withi
   const double tc_1 = hertz_contact_time_s(plain.mass_kg, plain.kn_N_m1_5, 1.0);
   REQUIRE(2 * 0.5 * v0 / 9.81 > window * tc_1 * std::pow(0.5 * v0, -0.2));
   REQUIRE(2 * 0.25 * v0 / 9.81 < window * tc_1 * std::pow(0.25 * v0, -0.2));
-  const DroppedBall tc = dropped_ball(window);
+  const DroppedBall tc = dropped_ball({.rest_tc_window = window});
   CHECK(tc.impacts == 2);
   CHECK(tc.rests == 1);
   // Resting, it has lost all it had by impact: m g h, to the ledger's accuracy, as without.
@@ -205,25 +209,25 @@ TEST_CASE("TC rest: a ball rests at the first bounce that would land again withi
   CHECK(plain.impact_J == doctest::Approx(tc.impact_J).epsilon(1e-9));
   // One t_c at 1 g holds none of these bounces (below the rest speed either way): the same bits.
   CHECK(hertz_enduring_speed_m_s(plain.mass_kg, plain.kn_N_m1_5, 9.81, 1.0) < 0.005);
-  const DroppedBall one = dropped_ball(1.0);
+  const DroppedBall one = dropped_ball({.rest_tc_window = 1.0});
   CHECK(one.impact_J == plain.impact_J);
   CHECK(one.impacts == 6);
 }
 
 namespace {
 
-/// Two 1 mm balls on a fixed floor at 1 g with the rest window `rest_tc_window`: the lower
+/// Two 1 mm balls on a fixed floor at 1 g with the resting settings `resting`: the lower
 /// one dropped from 0.1 mm comes to rest first, then the upper one lands on it at 0.31 m/s.
 struct StackedBalls {
   std::int64_t rests, knock_offs;
   double dissipated_J, expected_J, kinetic_J;
 };
 
-StackedBalls stacked_balls(double rest_tc_window) {
+StackedBalls stacked_balls(const HardRestingSettings& resting) {
   Scenario s = test::fixed_walls(
       "[cavity]\ndiameter_m = 0.01\nheight_m = 0.03\n[particles]\ncount = 2\n"
       "[hard_wall]\nen = 0.5\nbeta0 = 0\n[hard]\nbeta0 = 0\n");
-  s.hard_resting.rest_tc_window = rest_tc_window;
+  s.hard_resting = resting;
   const double r_m = 0.0005, low_drop_m = 1e-4, high_drop_m = 0.005;
   const Particles balls = test::spheres({{0.0, 0.0, r_m + low_drop_m}, {0.0, 0.0, 3 * r_m + high_drop_m}},
                                         {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}}, r_m);
@@ -240,10 +244,36 @@ StackedBalls stacked_balls(double rest_tc_window) {
 
 TEST_CASE("TC rest: a rider hit slower than the speed at which it would rest stays on the bed") {
   // Without a window the upper ball, at 0.31 m/s, knocks the lower one off its floor.
-  CHECK(stacked_balls(0.0).knock_offs > 0);
+  CHECK(stacked_balls({}).knock_offs > 0);
   // With 10⁴ contact times the soft law would hold both against 1 g below ~4 m/s: the lower
   // ball stays, the upper one rests on it at once, and all of their fall is dissipated.
-  const StackedBalls held = stacked_balls(1e4);
+  const StackedBalls held = stacked_balls({.rest_tc_window = 1e4});
+  CHECK(held.knock_offs == 0);
+  CHECK(held.rests == 2);
+  CHECK(held.kinetic_J == 0.0);
+  CHECK(held.dissipated_J == doctest::Approx(held.expected_J).epsilon(1e-9));
+}
+
+TEST_CASE("resting: a sphere slower than the elastic speed rests, where it would bounce without end") {
+  // Dropped from 20 µm it lands at 19.8 mm/s, between the rest speed (5 mm/s) and an elastic
+  // speed of 5 cm/s: the bounce is elastic, and it would leave the floor as fast as it came,
+  // every 4 ms. Leaving slower than the elastic speed, it rests at its first impact instead,
+  // having lost its fall m g h by impact.
+  const double drop_m = 2e-5;
+  const DroppedBall slow = dropped_ball({.elastic_speed_m_s = 0.05}, drop_m);
+  CHECK(slow.impacts == 1);
+  CHECK(slow.rests == 1);
+  CHECK(slow.kinetic_J == 0.0);
+  CHECK(slow.impact_J == doctest::Approx(slow.mass_kg * 9.81 * drop_m).epsilon(1e-9));
+  // With resting off it bounces elastically throughout the 0.3 s (about 74 times), losing
+  // nothing but round-off.
+  const DroppedBall bouncing = dropped_ball({.rest_speed_m_s = 0.0, .elastic_speed_m_s = 0.05}, drop_m);
+  CHECK(bouncing.rests == 0);
+  CHECK(bouncing.impacts > 70);
+  CHECK(bouncing.impact_J < 1e-9 * bouncing.mass_kg * 9.81 * drop_m);
+  // The same on a rider: at an elastic speed of 0.5 m/s the upper ball, landing at 0.31 m/s,
+  // does not knock the lower one off; it rests on it, and all of their fall is dissipated.
+  const StackedBalls held = stacked_balls({.elastic_speed_m_s = 0.5});
   CHECK(held.knock_offs == 0);
   CHECK(held.rests == 2);
   CHECK(held.kinetic_J == 0.0);

@@ -5,13 +5,13 @@
 # model on one thread; the two models' runs one after the other on one core
 # (PDAMP_BENCH_CORE, tools/bench-lib.sh), their order reversed every round. With
 # --hard-set KEY=VALUE a second hard run per case and round with that setting (e.g.
-# hard.rest_speed_m_s=0.05); with --baseline PDAMP a hard run per case and round by that
+# hard.rest_speed_m_s=0.05; repeat it for several settings in that one run); with --baseline PDAMP a hard run per case and round by that
 # other pdamp binary (an engine before a change: its "soft / this" against the same soft
 # runs). Prints every run, then per case and model the median (min–max)
 # of the run's wall time (the runs table's: the run itself), the soft model's time over the
 # hard one's taken round by round, and the particles' dissipation (impact and friction, at
 # the run's end) against the soft model's, which is the same every round.
-# Usage: tools/bench-models.sh [--rounds N] [--cases "NAME:DURATION_S ..."] [--hard-set KEY=VALUE]
+# Usage: tools/bench-models.sh [--rounds N] [--cases "NAME:DURATION_S ..."] [--hard-set KEY=VALUE]...
 #                              [--baseline PDAMP]
 #   defaults: 3 rounds; table2:0.05 table4_packing95:0.2 table4_packing50:0.2
 #   table4_packing25:0.2 table4_f100:0.2 table4_f20:1 (data/scenarios/NAME.ini)
@@ -20,15 +20,15 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 rounds=3
 cases="table2:0.05 table4_packing95:0.2 table4_packing50:0.2 table4_packing25:0.2 table4_f100:0.2 table4_f20:1"
-hard_set=""
+hard_set=()
 baseline=""
-usage="usage: tools/bench-models.sh [--rounds N] [--cases \"NAME:DURATION_S ...\"] [--hard-set KEY=VALUE] [--baseline PDAMP]"
+usage="usage: tools/bench-models.sh [--rounds N] [--cases \"NAME:DURATION_S ...\"] [--hard-set KEY=VALUE]... [--baseline PDAMP]"
 while [ $# -gt 0 ]; do
   [ $# -ge 2 ] || { echo "$usage ('$1' needs a value)" >&2; exit 2; }
   case $1 in
     --rounds) rounds=$2 ;;
     --cases) cases=$2 ;;
-    --hard-set) hard_set=$2 ;;
+    --hard-set) hard_set+=(--set "$2") ;;
     --baseline) baseline=$2 ;;
     *) echo "$usage (unknown option '$1')" >&2; exit 2 ;;
   esac
@@ -54,14 +54,14 @@ pdamp_and_store models
 case_run() {
   local name=${1%%:*} duration=${1#*:} model=$2
   local extra=(--set hard.restitution=calibrated)
-  [ "$model" = "hard+" ] && extra+=(--set "$hard_set")
+  [ "$model" = "hard+" ] && extra+=("${hard_set[@]}")
   # run (tools/bench-lib.sh) runs $pdamp: the baseline's runs see the other binary.
   [ "$model" = baseline ] && local pdamp=$baseline && model=hard
   run --scenario "$root/data/scenarios/$name.ini" --model "${model%+}" --duration "$duration" --threads 1 \
     --checkpoint-every 0 "${extra[@]}"
 }
 models=(soft hard)
-[ -n "$hard_set" ] && models+=("hard+")
+[ ${#hard_set[@]} -gt 0 ] && models+=("hard+")
 [ -n "$baseline" ] && models+=(baseline)
 
 # Settles each case's bed and calibrates its restitution, untimed (a run of 1 ms is enough).
@@ -83,7 +83,7 @@ for round in $(seq "$rounds"); do
   done
 done
 echo
-[ -n "$hard_set" ] && echo "hard+: hard with --set $hard_set"
+[ ${#hard_set[@]} -gt 0 ] && echo "hard+: hard with ${hard_set[*]}"
 [ -n "$baseline" ] && echo "baseline: hard by $baseline"
 echo "case model runs wall_median_s wall_min_s wall_max_s soft_over_this_median soft_over_this_min soft_over_this_max dissipation_vs_soft"
 for c in $cases; do

@@ -18,6 +18,13 @@ constexpr std::array<double, 3> margin_fractions{0.1, 0.002, 4e-5};
 
 const Eigen::Vector3d e_z = Eigen::Vector3d::UnitZ();
 
+/// The speed below which a sphere leaving a cap or rider rests: hard.rest_speed_m_s, but at
+/// least the elastic speed (if resting is on). A sphere slower than that bounces elastically,
+/// so it would leave its support as fast as it came, again and again, and never rest.
+double resting_floor_m_s(const HardRestingSettings& resting) {
+  return resting.rest_speed_m_s > 0.0 ? std::max(resting.rest_speed_m_s, resting.elastic_speed_m_s) : 0.0;
+}
+
 }  // namespace
 
 HostCoupling::SearchBox::SearchBox(const Eigen::Vector3d& centre_m, const Eigen::Vector3d& half_m) {
@@ -45,7 +52,7 @@ HostCoupling::HostCoupling(const Scenario& scenario, const Particles& initial, F
       cavity_(scenario.cavity),
       model_(scenario),
       fastest_rate_1_s_(std::max(model_.angular_frequency_rad_s(), model_.natural_angular_frequency_rad_s())),
-      rest_speed_m_s_(scenario.hard_resting.rest_speed_m_s),
+      rest_speed_m_s_(resting_floor_m_s(scenario.hard_resting)),
       rest_tc_window_(scenario.hard_resting.rest_tc_window),
       sphere_kn_N_m1_5_(scenario.soft_particle.kn_N_m1_5),
       wall_kn_N_m1_5_(scenario.soft_wall.kn_N_m1_5),

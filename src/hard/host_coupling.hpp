@@ -26,11 +26,12 @@
 ///   (TouchingBound).
 ///
 /// Resting: a sphere that leaves the floor, the top cap or a riding sphere slower than
-/// the rest speed (hard.rest_speed_m_s; with hard.rest_tc_window, also slower than it
-/// would have to be to land again within that many soft contact times) while the host's
-/// acceleration presses it there stops and rides with the host as added mass (no events
-/// at all; `attach`) until the host's acceleration stops pressing (the whole bed is
-/// released: a `bed_release` event) or a sphere hits it faster than that speed (`detach`).
+/// the rest speed (hard.rest_speed_m_s, at least hard.elastic_speed_m_s; with
+/// hard.rest_tc_window, also slower than it would have to be to land again within that
+/// many soft contact times) while the host's acceleration presses it there stops and
+/// rides with the host as added mass (no events at all; `attach`) until the host's
+/// acceleration stops pressing (the whole bed is released: a `bed_release` event) or a
+/// sphere hits it faster than that speed (`detach`).
 
 #include <array>
 #include <cstdint>
@@ -107,7 +108,8 @@ class HostCoupling {
   bool rests(int i, int support, double leaving_m_s, double normal_z_from_support, const HostState& host,
              double t_s) const;
   /// The rest speed of sphere i on rider `support` (−1 a cap) along a normal with z component
-  /// `normal_z_from_support` at t_s: hard.rest_speed_m_s, or with hard.rest_tc_window the
+  /// `normal_z_from_support` at t_s: hard.rest_speed_m_s (at least the elastic speed, below
+  /// which it would bounce as fast as it came, without end), or with hard.rest_tc_window the
   /// speed below which the host's pressing acceleration brings it back within that many soft
   /// contact times, if that is faster (hertz_enduring_speed_m_s).
   double rest_speed_m_s(int i, int support, double normal_z_from_support, const HostState& host, double t_s) const;
@@ -250,7 +252,7 @@ class HostCoupling {
   Cavity cavity_;
   HostModel model_;
   double fastest_rate_1_s_;
-  double rest_speed_m_s_;
+  double rest_speed_m_s_;  ///< hard.rest_speed_m_s, at least the elastic speed if resting is on
   double rest_tc_window_;
   double sphere_kn_N_m1_5_, wall_kn_N_m1_5_;  ///< the soft law's, for its contact times
 

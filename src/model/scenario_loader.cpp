@@ -354,7 +354,8 @@ const std::vector<KeySpec>& key_specs() {
     // The hard engine's resting-bed parameters (docs/hard-engine.md, "Resting beds and inelastic collapse").
     k.push_back({"hard.rest_speed_m_s", text(d.hard_resting.rest_speed_m_s), "m/s",
                  "a sphere leaving the floor, top cap or a resting sphere slower than this (relative to the host) "
-                 "while the host's acceleration presses it there comes to rest and rides with the host",
+                 "while the host's acceleration presses it there comes to rest and rides with the host (taken as at "
+                 "least elastic_speed_m_s, below which it would bounce without end; 0: only rest_tc_window rests)",
                  number(PDAMP_FIELD(hard_resting.rest_speed_m_s), non_negative), ""});
     k.push_back({"hard.rest_tc_window", text(d.hard_resting.rest_tc_window), "t_c",
                  "a sphere that would land again on its support within this many soft contact times (Hertz, at "

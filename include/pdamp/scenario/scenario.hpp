@@ -85,7 +85,8 @@ struct HardContactLaw {
 struct HardRestingSettings {
   /// A sphere that leaves the floor, the top cap or a resting sphere slower than this
   /// (normal speed relative to the host), while the host's acceleration presses it
-  /// there, comes to rest and rides with the host as added mass.
+  /// there, comes to rest and rides with the host as added mass. Taken as at least
+  /// elastic_speed_m_s, below which it would bounce as fast as it came (if not 0).
   double rest_speed_m_s = 0.005;
   /// Also faster than rest_speed_m_s: a sphere that would land again within this many soft
   /// contact times (its flight 2 v / a under the pressing acceleration a, against the Hertz

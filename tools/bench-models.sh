@@ -5,9 +5,9 @@
 # model on one thread; the two models' runs one after the other on one core
 # (PDAMP_BENCH_CORE, tools/bench-lib.sh), their order reversed every round. With
 # --hard-set KEY=VALUE a second hard run per case and round with that setting (e.g.
-# hard.rest_speed_m_s=0.05; repeat it for several settings in that one run); with --baseline PDAMP a hard run per case and round by that
-# other pdamp binary (an engine before a change: its "soft / this" against the same soft
-# runs). Prints every run, then per case and model the median (min–max)
+# hard.rest_speed_m_s=0.05; repeated, one run with all of them); with --baseline PDAMP a
+# hard run per case and round by that other pdamp binary (an engine before a change: its
+# "soft / this" against the same soft runs). Prints every run, then per case and model the median (min–max)
 # of the run's wall time (the runs table's: the run itself), the soft model's time over the
 # hard one's taken round by round, and the particles' dissipation (impact and friction, at
 # the run's end) against the soft model's, which is the same every round.

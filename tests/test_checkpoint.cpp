@@ -88,6 +88,42 @@ TEST_CASE_TEMPLATE("a run resumed from any of its checkpoints gives the same bit
   }
 }
 
+TEST_CASE_TEMPLATE("a stop request checkpoints the run where it stopped, and it resumes to the same bits", M, SoftModel,
+                   HardModel) {
+  const Scenario s = load_scenario(test::scenario_file("small"), short_run);
+  const Particles bed = placed(s);
+  MemoryRecorder plain;
+  auto plain_engine = make_engine({M::model}, s, bed);
+  REQUIRE(run_simulation(*plain_engine, s, plain).status == RunStatus::completed);
+  // Requested before the first step, so inside the engine's advance: within its grace the
+  // engine goes on to the next observation, where the run checkpoints.
+  std::atomic<bool> stop{true};
+  RunControl control;
+  control.stop = &stop;
+  control.checkpoint_interval = std::chrono::minutes(1);
+  MemoryRecorder stopped;
+  auto engine = make_engine({M::model}, s, bed);
+  const RunOutcome outcome = run_simulation(*engine, s, stopped, control);
+  CHECK(outcome.status == RunStatus::interrupted);
+  REQUIRE(!stopped.checkpoints.empty());
+  const RunCheckpoint c = stopped.checkpoints.back();
+  CHECK(c.t_s > 0.0);
+  CHECK(c.t_s == outcome.sim_time_s);
+  CHECK(stopped.samples.size() == static_cast<std::size_t>(c.samples));
+  CheckpointReader in(c.state);
+  const RunLoopState loop = read_run_loop_state(in);
+  const auto resumed_engine = restore_engine({M::model}, s, bed, in);
+  REQUIRE(run_simulation(*resumed_engine, s, stopped, {}, &loop).status == RunStatus::completed);
+  CHECK(plain.samples == stopped.samples);
+  CHECK(plain.cycles == stopped.cycles);
+  test::check_same_state(resumed_engine->state(), plain_engine->state());
+
+  // Past its grace the engine stops inside its advance (here long before 1 s of the run).
+  auto hasty = make_engine({M::model}, s, bed);
+  hasty->set_stop_request(&stop, std::chrono::milliseconds(1));
+  CHECK_THROWS_AS(hasty->advance_to(1.0), Interrupted);
+}
+
 TEST_CASE_TEMPLATE("an engine restored on two threads continues one saved on one with the same bits", M, SoftModel,
                    HardModel) {
   // 3,200 spheres: enough for the soft engine to share its passes among threads.

@@ -131,12 +131,21 @@ std::int64_t parse_run_id(const std::string& text) {
   return run_id;
 }
 
-int exit_code(const StoredRun& run) {
+int exit_code(RunStore& store, const StoredRun& run) {
   switch (run.outcome.status) {
     case RunStatus::completed:
       return 0;
-    case RunStatus::interrupted:
+    case RunStatus::interrupted: {
+      const std::string id = std::to_string(run.run_id);
+      const auto checkpoint = store.checkpoint(run.run_id);
+      std::cerr << "pdamp: run " << id << " stopped by a signal at t = " << format_number(run.outcome.sim_time_s, 6)
+                << " s; "
+                << (checkpoint ? "'pdamp resume " + id + "' continues it from its checkpoint at t = " +
+                                     format_number(checkpoint->checkpoint.t_s, 6) + " s"
+                               : std::string("it has no checkpoint to resume from"))
+                << "\n";
       return 128 + stop_signal.load();
+    }
     default:
       break;
   }
@@ -168,7 +177,7 @@ int run_command(const ScenarioRequest& request, const std::string& model_name, c
                     warnings_to(progress));
   progress.end();
   print_summary(store, run.run_id, std::cout);
-  return exit_code(run);
+  return exit_code(store, run);
 }
 
 int resume_command(const std::string& run_id_text, std::optional<double> until_s, const std::filesystem::path& db,
@@ -206,7 +215,7 @@ int resume_command(const std::string& run_id_text, std::optional<double> until_s
   const StoredRun run = resume_and_store(store, run_id, until_s, control, warnings_to(progress));
   progress.end();
   print_summary(store, run.run_id, std::cout);
-  return exit_code(run);
+  return exit_code(store, run);
 }
 
 namespace {
@@ -257,7 +266,7 @@ std::optional<int> comparison_run_ended(RunStore& store, const StoredRun& run, P
   }
   if (run.outcome.status == RunStatus::completed) return std::nullopt;
   print_summary(store, run.run_id, std::cout);
-  return exit_code(run);
+  return exit_code(store, run);
 }
 
 int store_and_print_comparison(RunStore& store, const Scenario& scenario, std::optional<std::int64_t> bed_state_id,

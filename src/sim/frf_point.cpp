@@ -91,7 +91,7 @@ RunOutcome run_cycles_simulation(Engine& engine, RunRecorder& recorder, const Ru
   RunOutcome& outcome = state.outcome;
   const double wall_before_s = outcome.wall_time_s;  // of the processes that ran it before this one
   auto wall_time_s = [&] { return wall_before_s + std::chrono::duration<double>(clock::now() - wall_start).count(); };
-  engine.set_stop_request(control.stop);
+  engine.set_stop_request(control.stop, checkpoints ? control.stop_grace : std::chrono::milliseconds{0});
   auto at_boundary = [&](const Observation& now) {
     if (outcome.samples == 0) outcome.initial_energy_J = now.energy.stored_J();
     const double error = now.energy.balance_relative_error(outcome.initial_energy_J);

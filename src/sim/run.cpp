@@ -57,7 +57,7 @@ RunOutcome run_simulation(Engine& engine, const Scenario& scenario, RunRecorder&
   // The checkpoint to store with the results when the run completes: its last state, or
   // the one before a last step that ends off the grid (another run, longer, never stops there).
   std::optional<RunCheckpoint> last_checkpoint;
-  engine.set_stop_request(control.stop);
+  engine.set_stop_request(control.stop, checkpoints ? control.stop_grace : std::chrono::milliseconds{0});
   try {
     CycleAnalyzer cycles = resume ? resume->cycles : make_cycle_analyzer(scenario, engine.state().particles);
     Observation now = engine.observe();

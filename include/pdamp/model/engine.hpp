@@ -3,7 +3,9 @@
 /// the same observations, state snapshots and statistics come out of either engine.
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -49,17 +51,33 @@ class Engine {
   virtual void restore(CheckpointReader& in) = 0;
 
   /// The flag advance_to looks at as it goes (every step, or every few thousand events):
-  /// once it is true, advance_to throws Interrupted, and the engine's state is not to be
-  /// used. A stop request (SIGINT, SIGTERM) reaches the engines' inner loops through it.
-  void set_stop_request(const std::atomic<bool>* stop) { stop_ = stop; }
+  /// a stop request (SIGINT, SIGTERM) reaches the engines' inner loops through it. Once it
+  /// is true, advance_to goes on for at most `grace` of wall time, so that a run loop
+  /// that checkpoints at its observations gets to the next one and the run resumes from
+  /// where it stopped; past the grace advance_to throws Interrupted, and the engine's
+  /// state is not to be used.
+  void set_stop_request(const std::atomic<bool>* stop, std::chrono::milliseconds grace = {}) {
+    stop_ = stop;
+    stop_grace_ = grace;
+    stop_seen_.reset();
+  }
 
  protected:
   void throw_if_stop_requested() const {
-    if (stop_ && stop_->load(std::memory_order_relaxed)) throw Interrupted("stopped by a signal");
+    if (stop_ && stop_->load(std::memory_order_relaxed)) [[unlikely]]
+      stop_requested();
   }
 
  private:
+  void stop_requested() const {
+    const auto now = std::chrono::steady_clock::now();
+    if (!stop_seen_) stop_seen_ = now;
+    if (now - *stop_seen_ >= stop_grace_) throw Interrupted("stopped by a signal");
+  }
+
   const std::atomic<bool>* stop_ = nullptr;
+  std::chrono::milliseconds stop_grace_{0};
+  mutable std::optional<std::chrono::steady_clock::time_point> stop_seen_;
 };
 
 }  // namespace pdamp

@@ -28,6 +28,10 @@ struct RunControl {
   /// run loop saves its own state and the engine's and hands them to the recorder with
   /// the results so far.
   std::chrono::nanoseconds checkpoint_interval{0};
+  /// With checkpoints, how long the engine goes on after a stop request to reach the next
+  /// observation, where the run checkpoints where it stopped; past it the run stops inside
+  /// the engine and keeps its last checkpoint before.
+  std::chrono::milliseconds stop_grace{5000};
 };
 
 /// How the run ended, as the store keeps it, and what it recorded.

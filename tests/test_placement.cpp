@@ -97,6 +97,34 @@ TEST_CASE("a deep bed's overlaps, which add up along its columns, are separated"
   CHECK(moved < 0.05 * r * 40);
 }
 
+TEST_CASE("a bed pressed against the lid or the side wall is separated against its gravity") {
+  // The columns of the deep bed above, hanging from the lid (gravity upwards) or lying
+  // against the side wall (gravity along x): separated from that wall outwards.
+  const CavitySettings cavity{0.01, 0.05};
+  const double r = 0.0005, overlap = 0.01 * r;
+  for (const Eigen::Vector3d& up : {Eigen::Vector3d(0.0, 0.0, -1.0), Eigen::Vector3d(-1.0, 0.0, 0.0)}) {
+    CAPTURE(up.transpose());
+    Particles p(16);
+    p.radius_m.setConstant(r);
+    p.mass_kg.setConstant(1e-6);
+    for (int k = 0; k < 8; ++k) {
+      const double h = r - overlap + k * (2 * r - overlap);  // from the wall the bed rests on
+      const double across = 0.002 - overlap;                 // the neighbour column, 1 % into it
+      if (up.z() < 0.0) {
+        p.position_m.col(k) << -0.001, 0.0, cavity.height_m - h;
+        p.position_m.col(8 + k) << -0.001 + across, 0.0, cavity.height_m - h;
+      } else {
+        p.position_m.col(k) << cavity.diameter_m / 2 - h, 0.0, 0.01;
+        p.position_m.col(8 + k) << cavity.diameter_m / 2 - h, 0.0, 0.01 + across;
+      }
+    }
+    const double moved = separate_overlaps(p, cavity, 0.0, up);
+    check_valid(p, cavity, 0.0);
+    CHECK(moved >= 8 * overlap);
+    CHECK(moved < 0.05 * r * 8);
+  }
+}
+
 namespace {
 
 /// The lattice's sites as first written, visited one by one: the reference for the

@@ -32,7 +32,9 @@ HardEngine::HardEngine(const Scenario& scenario, const Particles& initial, const
   // A bed settled with soft contacts overlaps by a tiny fraction of a radius: the hard
   // engine starts from it with the spheres pushed just apart.
   Particles separated = initial;
-  separation_m_ = separate_overlaps(separated, scenario.cavity, host_.trajectory().at(0.0).z_m);
+  const Eigen::Vector3d& g = scenario.gravity_m_s2;
+  const Eigen::Vector3d up = g.norm() > 0.0 ? Eigen::Vector3d(-g.normalized()) : Eigen::Vector3d::UnitZ();
+  separation_m_ = separate_overlaps(separated, scenario.cavity, host_.trajectory().at(0.0).z_m, up);
   flight_.start(separated);
   if (const double overlap = max_overlap_m(); overlap > 0.0) {
     std::ostringstream why;

@@ -210,7 +210,8 @@ Particles place_particles(const ParticleSettings& settings, const CavitySettings
   return particles;
 }
 
-double separate_overlaps(Particles& particles, const CavitySettings& settings, double host_z_m) {
+double separate_overlaps(Particles& particles, const CavitySettings& settings, double host_z_m,
+                         const Eigen::Vector3d& up) {
   const auto n = static_cast<int>(particles.size());
   if (n == 0) return 0.0;
   const Cavity cavity(settings);
@@ -224,15 +225,16 @@ double separate_overlaps(Particles& particles, const CavitySettings& settings, d
   for (int sweep = 0; sweep < 1000; ++sweep) {
     bool moved = false;
     cells.build(grid, particles.position_m);
-    // Bottom up, each sphere moves out of those it rests on (and out of the walls): a bed's
-    // overlaps add up along its columns, and this lifts a whole column in one sweep, where
-    // pushing pairs apart symmetrically passes them up one layer a sweep. Side by side
-    // contacts are pushed apart half each, so that a sphere against the side wall can
-    // move its neighbour rather than be pushed back into it.
+    // Bottom up (against gravity, whichever wall the bed rests on), each sphere moves out
+    // of those it rests on (and out of the walls): a bed's overlaps add up along its
+    // columns, and this lifts a whole column in one sweep, where pushing pairs apart
+    // symmetrically passes them up one layer a sweep. Side by side contacts are pushed
+    // apart half each, so that a sphere against the side wall can move its neighbour
+    // rather than be pushed back into it.
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](int a, int b) {
-      const double za = particles.position_m(2, a), zb = particles.position_m(2, b);
-      return za < zb || (za == zb && a < b);
+      const double ha = particles.position_m.col(a).dot(up), hb = particles.position_m.col(b).dot(up);
+      return ha < hb || (ha == hb && a < b);
     });
     for (int k = 0; k < n; ++k) rank[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
     for (const int i : order) {
@@ -246,7 +248,7 @@ double separate_overlaps(Particles& particles, const CavitySettings& settings, d
           const double distance = d.norm(), overlap = particles.radius_m[i] + particles.radius_m[j] - distance;
           if (overlap <= 0.0) continue;
           const Eigen::Vector3d push = (overlap + margin) / distance * d;
-          const bool resting_on_j = d.z() > 0.5 * distance;
+          const bool resting_on_j = d.dot(up) > 0.5 * distance;
           if (resting_on_j) {
             xi += push;
           } else {

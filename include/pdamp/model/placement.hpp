@@ -33,12 +33,13 @@ void check_particles_fit(const ParticleSettings& settings, const CavitySettings&
 /// about as many sites as spheres (at most about twice as many, when a layer appears).
 Particles place_particles(const ParticleSettings& settings, const CavitySettings& cavity, double host_z_m);
 
-/// Moves overlapping spheres apart — bottom up, each out of the spheres it rests on along
-/// the line of centres, side-by-side pairs half each, and out of the walls — until no two
-/// touch, so a bed settled with soft contacts (whose overlaps are a tiny fraction of a
-/// radius at rest) can start a hard-sphere run. Returns the
-/// largest distance a sphere was moved (m). Throws RuntimeFailure if 1000 sweeps do not
-/// separate them (overlaps far beyond a resting bed's).
-double separate_overlaps(Particles& particles, const CavitySettings& cavity, double host_z_m);
+/// Moves overlapping spheres apart — bottom up along `up` (a unit vector against gravity),
+/// each out of the spheres it rests on along the line of centres, side-by-side pairs half
+/// each, and out of the walls — until no two touch, so a bed settled with soft contacts
+/// (whose overlaps are a tiny fraction of a radius at rest) can start a hard-sphere run.
+/// Returns the largest distance a sphere was moved (m). Throws RuntimeFailure if 1000
+/// sweeps do not separate them (overlaps far beyond a resting bed's).
+double separate_overlaps(Particles& particles, const CavitySettings& cavity, double host_z_m,
+                         const Eigen::Vector3d& up = Eigen::Vector3d::UnitZ());
 
 }  // namespace pdamp

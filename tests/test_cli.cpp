@@ -161,6 +161,18 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
       {{"run", "--scenario", table1(), "--model", "soft", "--set", "host.z0_m=0.01\nhost.mass_kg=1", "--db",
         db.string()},
        "without line breaks"},
+      // Names SQLite takes for something else than a file: the runs would be lost.
+      {{"run", "--scenario", table1(), "--model", "hard", "--db", ""},
+       "SQLite takes this name for a temporary database"},
+      {{"runs", "--db", ":memory:"}, "SQLite takes this name for a database in memory"},
+      {{"run", "--scenario", table1(), "--model", "hard", "--db", "file:" + db.string()},
+       "SQLite takes this name for a URI"},
+      // Options written whole, and no arguments where a command takes none.
+      {{"delete", "1", "--f", "--db", db.string()}, "unrecognised option '--f'"},
+      {{"run", "--scen", table1(), "--model", "hard", "--db", db.string()}, "unrecognised option '--scen'"},
+      {{"rom", "--tab", "x.csv"}, "unrecognised option '--tab'"},
+      {{"keys", "extra"}, "pdamp keys takes no arguments, not 'extra'"},
+      {{"--version", "extra"}, "--version takes no arguments, not 'extra'"},
   };
   for (const auto& c : cases) {
     CAPTURE(c.expected);
@@ -169,6 +181,16 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
     CHECK(r.err.find(c.expected) != std::string::npos);
   }
   CHECK_FALSE(std::filesystem::exists(db));
+}
+
+TEST_CASE("output that cannot be written fails the command, naming the cause") {
+  test::TempDir dir("cli-full");
+  for (const std::string& command : {std::string("keys"), "check --scenario " + table1()}) {
+    CAPTURE(command);
+    const Result r = pdamp_cli({"-c", std::string(PDAMP_EXECUTABLE) + " " + command + " > /dev/full"}, dir, "/bin/sh");
+    CHECK(r.code == 1);
+    CHECK(r.err.find("the output could not be written to stdout: No space left on device") != std::string::npos);
+  }
 }
 
 TEST_CASE("the hard engine's benchmark refuses bad options with code 2, naming the option and what is valid") {
@@ -585,7 +607,7 @@ TEST_CASE("a store its reader cannot write lists and shows runs") {
                                "--duration", "0.01", "--db", db.string()},
                               dir);
   CHECK(run.code == 2);
-  CHECK(run.err.find("readonly database") != std::string::npos);
+  CHECK(run.err.find("can only be read: its file is not writable by this user") != std::string::npos);
   CHECK(count_rows(db, "SELECT count(*) FROM runs") == 1);
 }
 

@@ -6,8 +6,10 @@
 #include <unistd.h>
 
 #include <boost/program_options.hpp>
+#include <cerrno>
 #include <chrono>
 #include <csignal>
+#include <cstring>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -20,6 +22,7 @@
 #include "pdamp/version.hpp"
 #include "rom_command.hpp"
 #include "study_commands.hpp"
+#include "text_table.hpp"
 
 namespace po = boost::program_options;
 using namespace pdamp;
@@ -213,26 +216,40 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   if (command == "rom") return rom_command(args);
   if (command == "study") return study_command(args);
   if (command == "keys") {
+    if (!args.empty()) throw InputError("pdamp keys takes no arguments, not '" + printable(args[0]) + "'");
     describe_scenario_keys(std::cout);
     return 0;
   }
   throw InputError("unknown command '" + command + "'\n\n" + usage);
 }
 
-}  // namespace
+/// The command's exit code, or 1 if its results could not all be written to stdout (a
+/// full disk behind `> file`): a truncated output must not pass for a complete one.
+int with_output_written(int code) {
+  std::cout.flush();
+  if (std::cout) return code;
+  std::cerr << "pdamp: error: the output could not be written to stdout: " << std::strerror(errno) << "\n";
+  return code == 0 ? 1 : code;
+}
 
-int main(int argc, char** argv) {
-  const std::vector<std::string> all(argv + 1, argv + argc);
+int run_command_line(const std::vector<std::string>& all) {
   if (all.empty() || all[0] == "--help" || all[0] == "-h" || all[0] == "help") {
     std::cout << usage;
     return all.empty() ? 2 : 0;
   }
   if (all[0] == "--version") {
+    if (all.size() > 1) throw InputError("--version takes no arguments, not '" + printable(all[1]) + "'");
     std::cout << "pdamp " << version_string << "\n";
     return 0;
   }
+  return dispatch(all[0], {all.begin() + 1, all.end()});
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
   try {
-    return dispatch(all[0], {all.begin() + 1, all.end()});
+    return with_output_written(run_command_line({argv + 1, argv + argc}));
   } catch (const InputError& e) {
     std::cerr << "pdamp: " << e.what() << "\n";
     return 2;

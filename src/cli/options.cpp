@@ -20,7 +20,8 @@ CommandLine parse_options(const std::vector<std::string>& args, const po::option
                           const po::positional_options_description& positional) {
   CommandLine line;
   try {
-    const po::parsed_options parsed = po::command_line_parser(args).options(options).positional(positional).run();
+    const po::parsed_options parsed =
+        po::command_line_parser(args).options(options).positional(positional).style(unabbreviated_style).run();
     po::store(parsed, line.vm);
     po::notify(line.vm);
     line.in_order = parsed.options;

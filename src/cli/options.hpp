@@ -14,6 +14,10 @@ namespace pdamp {
 /// --db FILE, default ./pdamp.sqlite.
 boost::program_options::options_description db_option();
 
+/// Boost's default style, but an option must be written whole: `--f` is not `--force`.
+inline constexpr int unabbreviated_style = boost::program_options::command_line_style::default_style &
+                                           ~boost::program_options::command_line_style::allow_guessing;
+
 /// A command's parsed arguments: the options by name, and each as given, in order.
 struct CommandLine {
   boost::program_options::variables_map vm;

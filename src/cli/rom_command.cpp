@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "options.hpp"
 #include "pdamp/errors.hpp"
 #include "pdamp/rom/prediction_files.hpp"
 #include "pdamp/rom/table_files.hpp"
@@ -261,7 +262,7 @@ int rom_command(const std::vector<std::string>& args) {
   const po::options_description options = rom_options();
   po::variables_map vm;
   try {
-    po::store(po::command_line_parser(args).options(options).run(), vm);
+    po::store(po::command_line_parser(args).options(options).style(unabbreviated_style).run(), vm);
   } catch (const po::error& e) {
     throw InputError("pdamp rom: " + std::string(e.what()));
   }

@@ -205,6 +205,10 @@ RunStore::RunStore(const std::filesystem::path& file, StoreAccess access, const 
   examined.reader.reset();
   try {
     db_ = std::make_unique<sqlite::Database>(file, sqlite::Access::read_write, options.busy_limit);
+    if (db_->read_only()) {
+      throw sqlite::NotWritable("the store '" + file.string() +
+                                "' can only be read: its file is not writable by this user; give a writable --db");
+    }
     if (options.single_process) db_->exec("PRAGMA locking_mode = EXCLUSIVE");
     sqlite::retry_while_busy(*db_, [this] { db_->exec("PRAGMA journal_mode = WAL"); });
     db_->exec("PRAGMA synchronous = NORMAL");  // WAL + NORMAL: a killed process loses nothing committed

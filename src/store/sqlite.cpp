@@ -65,6 +65,8 @@ Database::Database(const std::filesystem::path& file, Access access, std::chrono
 
 Database::~Database() { sqlite3_close(db_); }
 
+bool Database::read_only() const { return sqlite3_db_readonly(db_, "main") == 1; }
+
 int Database::on_busy(void* self, int attempt) {
   auto& db = *static_cast<Database*>(self);
   const auto now = std::chrono::steady_clock::now();

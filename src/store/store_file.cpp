@@ -105,6 +105,17 @@ void refuse_newer(const std::filesystem::path& file, int version, int latest_ver
 }
 
 Examined examine(const std::filesystem::path& file, const StoreOptions& options, int latest_version) {
+  // Names SQLite takes for something else than a file: runs stored there would be lost
+  // (a temporary or in-memory database) or land in another file (a URI's path).
+  const std::string name = file.string();
+  if (name.empty() || name == ":memory:" || name.starts_with("file:")) {
+    const std::string what = name.empty()         ? "a temporary database, deleted when pdamp ends"
+                             : name == ":memory:" ? "a database in memory, gone when pdamp ends"
+                                                  : "a URI, whose path is another file's";
+    throw InputError("database '" + name + "': SQLite takes this name for " + what +
+                     "; give a run store file's path with --db" +
+                     (name.empty() ? "" : " (for a file of that name, './" + name + "')"));
+  }
   std::error_code error;
   const auto status = std::filesystem::status(file, error);
   if (!std::filesystem::exists(status)) return {};

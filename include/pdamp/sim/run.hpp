@@ -31,7 +31,7 @@ struct RunControl {
   /// With checkpoints, how long the engine goes on after a stop request to reach the next
   /// observation, where the run checkpoints where it stopped; past it the run stops inside
   /// the engine and keeps its last checkpoint before.
-  std::chrono::milliseconds stop_grace{5000};
+  std::chrono::milliseconds stop_grace{300};
 };
 
 /// How the run ended, as the store keeps it, and what it recorded.

@@ -68,6 +68,9 @@ class Database {
   /// Rows changed by the last INSERT, UPDATE or DELETE.
   std::int64_t changes() const;
   sqlite3* handle() const { return db_; }
+  /// Whether SQLite opened the file for reading only (opened to write a file that this
+  /// user may not write, it falls back to that).
+  bool read_only() const;
   const std::filesystem::path& file() const { return file_; }
   std::chrono::milliseconds busy_limit() const { return busy_limit_; }
 

@@ -111,7 +111,7 @@ void print_frf_points(StudyStore& studies, std::int64_t id, std::ostream& out) {
           r->particle_mass_kg > 0 ? std::optional(m.apparent_mass_kg / r->particle_mass_kg) : std::nullopt;
       row.insert(row.end(),
                  {m.settled ? "yes" : "no", std::to_string(r->cycles_run), format_number(m.normalised_amplitude),
-                  format_number(m.phase_rad, 3), format_number(m.gamma, 3), format_optional(ratio, 3),
+                  format_number(m.phase_rad, 3), format_optional(m.gamma, 3), format_optional(ratio, 3),
                   format_number(m.equivalent_damping_N_s_m, 3), format_number(m.loss_factor, 3),
                   format_number(r->wall_time_s, 3)});
     } else {
@@ -157,7 +157,7 @@ void print_characterise_points(StudyStore& studies, std::int64_t id, std::ostrea
       const double m_p = r->particle_mass_kg;
       const double omega_rad_s = 2.0 * std::numbers::pi * c.place.frequency_hz;
       auto ratio = [&](double x, double by) { return m_p > 0 ? std::optional(x / by) : std::nullopt; };
-      row.insert(row.end(), {m.settled ? "yes" : "no", std::to_string(r->cycles_run), format_number(m.gamma, 3),
+      row.insert(row.end(), {m.settled ? "yes" : "no", std::to_string(r->cycles_run), format_optional(m.gamma, 3),
                              format_number(m.amplitude_m / r->free_height_m, 3),
                              format_optional(ratio(m.apparent_mass_kg, m_p), 3),
                              format_optional(ratio(m.equivalent_damping_N_s_m, m_p * omega_rad_s), 3),

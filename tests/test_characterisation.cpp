@@ -167,7 +167,8 @@ TEST_CASE("a bed at rest has m_app = m_p within 1 % and c_eq about 0, the empty 
     }
     const double m_p = p.result->particle_mass_kg;
     const double omega = 2.0 * std::numbers::pi * p.place.frequency_hz;
-    CHECK(m.gamma < 1.0);
+    REQUIRE(m.gamma.has_value());
+    CHECK(*m.gamma < 1.0);
     CHECK(std::abs(m.apparent_mass_kg / m_p - 1.0) < 0.01);
     CHECK(std::abs(m.equivalent_damping_N_s_m) / (m_p * omega) < 1e-3);
     CHECK(m.floor_contact_fraction == 1.0);
@@ -236,6 +237,26 @@ TEST_CASE("a bed at rest has m_app = m_p within 1 % and c_eq about 0, the empty 
 // The container's work per cycle against the bed is π c_eq ω A² (only the force's first
 // harmonic works against a sinusoidal velocity), and at a steady state the bed dissipates
 // it: η from the ledger equals c_eq / (m_p ω) from the force, two independent routes.
+TEST_CASE("a weightless [characterise] point has no Gamma: NULL in the store, '-' in study show") {
+  test::TempDir dir("characterise-weightless");
+  const auto db = dir / "runs.sqlite";
+  const auto file = dir / "c.ini";
+  write_file(file, characterise_study("[characterise]\namplitudes = 0.0002, 0.0004\nfrequencies = 20, 30\n"
+                                      "max_cycles = 12\nmeasured_cycles = 3\ngravity.g_m_s2 = 0\n"));
+  const Result r = pdamp_cli({"study", "run", file.string(), "--db", db.string()}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(count_rows(db,
+                   "SELECT count(*) FROM study_characterisation WHERE status = 'completed' AND gamma IS NULL AND "
+                   "gravity_m_s2 = 0") == 4);
+  RunStore store(db, StoreAccess::read);
+  for (const auto& p : StudyStore(store).characterise_points(1)) {
+    REQUIRE(p.result);
+    CHECK_FALSE(p.result->metrics.gamma.has_value());
+  }
+  CHECK(shown_column(r.out, "Gamma") == std::vector<std::string>(4, "-"));
+}
+
 TEST_CASE("a shaken bed: the ledger's loss per cycle is the first harmonic's, the bed leaves the floor") {
   test::TempDir dir("characterise-shaken");
   const auto db = dir / "runs.sqlite";

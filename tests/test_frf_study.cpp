@@ -273,6 +273,25 @@ TEST_CASE("an [frf] host-alone curve gives the closed-form amplitude, phase and 
   }
 }
 
+TEST_CASE("a weightless [frf] point has no Gamma: NULL in the store, '-' in study show") {
+  test::TempDir dir("frf-weightless");
+  const auto db = dir / "runs.sqlite";
+  const auto file = dir / "w.ini";
+  write_file(file, "[study]\nscenario = " + small() +
+                       "\nmodels = hard\n[frf]\nmode = base\nlevels = 0.001\nfrequencies = 15, 17\nmax_cycles = 20\n"
+                       "gravity.g_m_s2 = 0\n");
+  run_study(file, db, dir);
+  CHECK(count_rows(db, "SELECT count(*) FROM study_frf WHERE status = 'completed' AND gamma IS NULL") == 2);
+  RunStore store(db, StoreAccess::read);
+  for (const auto& p : StudyStore(store).frf_points(1)) {
+    REQUIRE(p.result);
+    CHECK_FALSE(p.result->metrics.gamma.has_value());
+    CHECK(p.result->metrics.amplitude_m > 0.0);
+  }
+  const Result show = pdamp_cli({"study", "show", "1", "--db", db.string()}, dir);
+  CHECK(shown_column(show.out, "Gamma") == std::vector<std::string>{"-", "-"});
+}
+
 TEST_CASE("continuation: each point starts from the stored final state of the one before, bit for bit") {
   for (const Model model : {Model::hard, Model::soft}) {
     CAPTURE(to_string(model));

@@ -8,6 +8,7 @@
 #include <sys/resource.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -183,6 +184,32 @@ inline std::int64_t count_rows(const std::filesystem::path& db, const std::strin
   sqlite::Statement q(d, sql);
   q.step();
   return q.column_int(0);
+}
+
+/// The cells of one column of the table `pdamp study show` prints: of the rows after its
+/// header line, whose columns are two or more blanks apart (a name or cell may hold one).
+inline std::vector<std::string> shown_column(const std::string& out, const std::string& column) {
+  const auto cells_of = [](const std::string& line) {
+    std::vector<std::string> cells;
+    for (std::size_t i = line.find_first_not_of(' '); i < line.size();) {
+      const std::size_t end = std::min(line.find("  ", i), line.size());
+      cells.push_back(line.substr(i, end - i));
+      i = line.find_first_not_of(' ', end);
+    }
+    return cells;
+  };
+  std::istringstream in(out);
+  std::vector<std::string> header, cells;
+  for (std::string line; std::getline(in, line);) {
+    const auto row = cells_of(line);
+    if (header.empty() && !row.empty() && row.front() == "point") {
+      header = row;
+    } else if (!header.empty() && row.size() == header.size()) {
+      cells.push_back(
+          row.at(static_cast<std::size_t>(std::find(header.begin(), header.end(), column) - header.begin())));
+    }
+  }
+  return cells;
 }
 
 /// `pdamp study run FILE --jobs N` into its own store (DIR/jobsN.sqlite) for each N; each

@@ -591,6 +591,55 @@ TEST_CASE("a store of schema 15 is migrated: its runs started from their beds as
   CHECK(scalar(db, "SELECT count(*) FROM runs WHERE bed_shift_z_m IS NULL AND bed_shift_v_m_s IS NULL") == 1);
 }
 
+TEST_CASE("a store of schema 16 is migrated: a weightless point's Gamma, stored as 0, is NULL, the others kept") {
+  test::TempDir dir("store-migrate-16");
+  std::vector<std::string> rows{
+      "INSERT INTO studies (name, models, n_points, study_file, study_text, scenario_file, scenario_text, "
+      "pdamp_version, created_at) VALUES ('old', 'hard', 4, 'a', 'b', 'c', 'd', '0.1.0', '2026-01-01')"};
+  for (int point = 1; point <= 4; ++point) {
+    const std::string p = std::to_string(point);
+    rows.push_back(
+        "INSERT INTO runs (model, scenario_name, scenario_text, seed, n_particles, duration_s, "
+        "pdamp_version, status, started_at) VALUES ('hard', 'old/" +
+        p + "', '', 1, 0, 0.1, '0.1.0', 'completed', '2026-01-01')");
+    rows.push_back("INSERT INTO study_points (study_id, point, section, status) VALUES (1, " + p + ", '" +
+                   (point <= 2 ? "frf" : "characterise") + "', 'completed')");
+  }
+  // Points 1 and 2 of an [frf] study, weightless and not; 3 and 4 of a characterisation.
+  for (const auto& [point, gamma] : {std::pair{1, "0"}, std::pair{2, "1.5"}}) {
+    rows.push_back("INSERT INTO study_frf_metrics VALUES (1, " + std::to_string(point) + ", " + std::to_string(point) +
+                   ", 1, 10, 20, 10, 0.001, 0, -0.1, 2.0, " + gamma + ", 0, 0, 0.01, 0.02, 0.004, 0.1, 0.004, 1.0)");
+  }
+  for (const auto& [point, gravity] : {std::pair{3, "0"}, std::pair{4, "9.81"}}) {
+    rows.push_back(
+        "INSERT INTO study_characterise_points (study_id, point, curve, model, empty, amplitude_m, "
+        "frequency_hz, step) VALUES (1, " +
+        std::to_string(point) + ", " + std::to_string(point - 2) + ", 'hard', 0, 0.001, 20, 1)");
+    rows.push_back("INSERT INTO study_characterise_metrics VALUES (1, " + std::to_string(point) + ", " +
+                   std::to_string(point) + ", 1, 10, 20, 10, 0.001, " + (point == 3 ? "0" : "2.5") +
+                   ", 0.004, 0, 0.1, 0, 0.01, 0, 0.2, 1, 0, 0.004, " + gravity + ", 0.01, 1.0)");
+  }
+  RunStore store(store_of_schema(dir, 16, rows));
+  sqlite::Database db(store.file());
+  CHECK(scalar(db, "PRAGMA user_version") == RunStore::schema_version());
+  CHECK(scalar(db, "SELECT count(*) FROM study_frf_metrics WHERE point = 1 AND gamma IS NULL") == 1);
+  CHECK(scalar(db,
+               "SELECT count(*) FROM study_frf_metrics WHERE point = 2 AND gamma = 1.5 AND amplitude_m = 0.001 "
+               "AND wall_time_s = 1.0") == 1);
+  CHECK(scalar(db, "SELECT count(*) FROM study_characterise_metrics WHERE point = 3 AND gamma IS NULL") == 1);
+  CHECK(scalar(db,
+               "SELECT count(*) FROM study_characterise_metrics WHERE point = 4 AND gamma = 2.5 AND "
+               "gravity_m_s2 = 9.81 AND wall_time_s = 1.0") == 1);
+  // The views read the new tables, and a point's run still takes its metrics with it.
+  CHECK(scalar(db, "SELECT count(*) FROM study_characterisation WHERE gamma IS NULL") == 1);
+  CHECK(scalar(db, "SELECT count(*) FROM study_characterisation WHERE gamma = 2.5") == 1);
+  CHECK(scalar(db, "SELECT count(*) FROM pragma_foreign_key_check") == 0);
+  db.exec("PRAGMA foreign_keys = ON; DELETE FROM runs WHERE run_id IN (1, 3)");
+  CHECK(scalar(db, "SELECT count(*) FROM study_frf_metrics") +
+            scalar(db, "SELECT count(*) FROM study_characterise_metrics") ==
+        2);
+}
+
 TEST_CASE("a store of schema 14 is migrated: its [frf] points have no grid, and study_frf shows the column") {
   test::TempDir dir("store-migrate-14");
   const auto file =

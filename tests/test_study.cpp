@@ -282,6 +282,80 @@ TEST_CASE("a study counts as changed only if it would run other points, and ever
   CHECK(changed[0] == "base scenario [soft_wall] mu: '0.3' now, '0.55' stored");
 }
 
+TEST_CASE("every [frf] and [characterise] key that changes what is computed is a difference, named") {
+  const std::string frf =
+      "[frf]\nmode = force\nlevels = 0.05, 0.1\nfrequencies = 15:19:3\ndirection = both\nhost_alone = true\n"
+      "host.z0_m = 0\n";
+  const std::string characterise = "[characterise]\namplitudes = 0.0002, 0.0004\nfrequencies = 20, 30\n";
+  struct Case {
+    std::string stored, now;
+    std::vector<std::string> differences;
+  };
+  const std::vector<Case> cases{
+      {frf + "start = predict\n", frf + "start = continue\n", {"[frf] start: 'continue' now, 'predict' stored"}},
+      {frf, frf + "amplitude_tolerance = 0.5\n", {"[frf] amplitude_tolerance: '0.5' now, '0.001' stored"}},
+      {frf, frf + "phase_tolerance_rad = 0.5\n", {"[frf] phase_tolerance_rad: '0.5' now, '0.001' stored"}},
+      {frf, frf + "min_cycles = 30\n", {"[frf] min_cycles: '30' now, '10' stored"}},
+      {frf, frf + "consecutive_cycles = 2\n", {"[frf] consecutive_cycles: '2' now, '5' stored"}},
+      // The same run length (max_cycles + measured_cycles), measured otherwise.
+      {frf + "max_cycles = 40\nmeasured_cycles = 5\n",
+       frf + "max_cycles = 35\nmeasured_cycles = 10\n",
+       {"[frf] max_cycles: '35' now, '40' stored", "[frf] measured_cycles: '10' now, '5' stored"}},
+      {characterise,
+       characterise + "amplitude_tolerance = 0.5\n",
+       {"[characterise] amplitude_tolerance: '0.5' now, '0.001' stored"}},
+      {characterise,
+       characterise + "phase_tolerance_rad = 0.5\n",
+       {"[characterise] phase_tolerance_rad: '0.5' now, '0.001' stored"}},
+      {characterise, characterise + "min_cycles = 30\n", {"[characterise] min_cycles: '30' now, '10' stored"}},
+      {characterise,
+       characterise + "consecutive_cycles = 2\n",
+       {"[characterise] consecutive_cycles: '2' now, '5' stored"}},
+  };
+  for (const auto& c : cases) {
+    CAPTURE(c.now);
+    CHECK(study_differences(study_of(c.stored), study_of(c.now)) == c.differences);
+  }
+  // The defaults written out are no difference.
+  CHECK(study_differences(study_of(frf), study_of(frf + "start = continue\namplitude_tolerance = 1e-3\n"
+                                                        "consecutive_cycles = 5\nmin_cycles = 10\n"))
+            .empty());
+}
+
+TEST_CASE("numbers are compared by value: written otherwise they are no difference, other values are named") {
+  const auto same = [](const std::string& stored, const std::string& now) {
+    CAPTURE(now);
+    CHECK(study_differences(study_of(stored), study_of(now)).empty());
+  };
+  const auto named = [](const std::string& stored, const std::string& now, const std::string& difference) {
+    CAPTURE(now);
+    const auto differences = study_differences(study_of(stored), study_of(now));
+    REQUIRE(differences.size() == 1);
+    CHECK(differences[0] == difference);
+  };
+  const std::string sweep = "[sweep]\nhost.damping_N_s_m = 0.1, 0.2\nrun.duration_s = 0.1\n";
+  same(sweep, "[sweep]\nhost.damping_N_s_m = 0.1, 0.2\nrun.duration_s = 0.10\n");
+  same(sweep, "[sweep]\nhost.damping_N_s_m = 1e-1, 2.0e-1\nrun.duration_s = 1e-1\n");
+  named(sweep, "[sweep]\nhost.damping_N_s_m = 0.1, 0.2\nrun.duration_s = 0.11\n",
+        "[sweep] run.duration_s: '0.11' now, '0.1' stored");
+  // Integers exactly, beyond a double's 53 bits too.
+  same("[sweep]\nparticles.seed = 7, 8\n", "[sweep]\nparticles.seed = 007, 8\n");
+  named("[sweep]\nparticles.seed = 18446744073709551615, 1\n", "[sweep]\nparticles.seed = 18446744073709551614, 1\n",
+        "[sweep] particles.seed: '18446744073709551614, 1' now, '18446744073709551615, 1' stored");
+
+  const std::string frf = "[frf]\nmode = force\nfrequencies = 15, 17\nmax_cycles = 20\n";
+  same(frf + "levels = 0.05, 0.1\nhost.z0_m = 0\n", frf + "levels = 0.05, 0.10\nhost.z0_m = 0.0\n");
+  named(frf + "levels = 0.05, 0.1\nhost.z0_m = 0\n", frf + "levels = 0.05, 0.1\nhost.z0_m = 0.001\n",
+        "[frf] host.z0_m: '0.001' now, '0' stored");
+  named(frf + "levels = 0.05, 0.1\n", frf + "levels = 0.05, 0.15\n",
+        "[frf] levels: '0.05, 0.15' now, '0.05, 0.1' stored");
+
+  const std::string characterise = "[characterise]\nfrequencies = 20, 30\n";
+  same(characterise + "amplitudes = 0.0002, 0.0004\n", characterise + "amplitudes = 2e-4, 4E-4\n");
+  named(characterise + "amplitudes = 0.0002, 0.0004\n", characterise + "amplitudes = 0.0002, 0.0005\n",
+        "[characterise] amplitudes: '0.0002, 0.0005' now, '0.0002, 0.0004' stored");
+}
+
 namespace {
 
 /// A completed run with samples every 0.1 s and two cycles.

@@ -174,6 +174,50 @@ TEST_CASE("a study runs into the store, lists and shows, resumes without redoing
   CHECK(r.err.find("resuming from the definition stored with it") != std::string::npos);
 }
 
+TEST_CASE("resume never stores the study its file now holds: another study there is refused, the difference named") {
+  test::TempDir dir("study-resume-other");
+  const auto db = (dir / "runs.sqlite").string();
+  const auto file = dir / "rp.ini";
+  write_file(file, "[study]\nname = rp\nscenario = " + small() +
+                       "\nmodels = hard\n[sweep]\nhost.damping_N_s_m = 0.1, 0.2\nrun.duration_s = 0.02\n");
+  Result r = pdamp_cli({"study", "run", file.string(), "--db", db}, dir);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const std::int64_t runs = count_rows(db, "SELECT count(*) FROM runs");
+
+  write_file(file,
+             "[study]\nname = other\nscenario = " + small() + "\nmodels = hard\n[sweep]\nhost.mass_kg = 0.03, 0.04\n");
+  r = pdamp_cli({"study", "resume", "1", "--db", db}, dir);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("study 1 ('rp' in '" + db + "'): its study file '" + file.string() +
+                   "' now describes another study:\n  [study] name: 'other' now, 'rp' stored\n") != std::string::npos);
+  CHECK(r.err.find("  [sweep] host.mass_kg: '0.03, 0.04' now, '(not given)' stored\n") != std::string::npos);
+  CHECK(count_rows(db, "SELECT count(*) FROM studies") == 1);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs") == runs);
+  // Shown as stored, and said so.
+  const Result show = pdamp_cli({"study", "show", "1", "--db", db}, dir);
+  CHECK(show.code == 0);
+  CHECK(show.out.find("  study file     " + file.string() +
+                      " (now another study: [study] name: 'other' now, 'rp' stored; ...; the study is shown as "
+                      "stored)\n") != std::string::npos);
+  CHECK(show.out.find("host.damping_N_s_m = 0.2, run.duration_s = 0.02") != std::string::npos);
+
+  // The same study written otherwise resumes; with the file gone, from the stored definition.
+  write_file(file, "[study]\nname = rp\nscenario = " + small() +
+                       "\nmodels = hard\n[sweep]\nhost.damping_N_s_m = 1e-1, 0.20\nrun.duration_s = 0.020\n");
+  r = pdamp_cli({"study", "resume", "1", "--db", db}, dir);
+  CHECK(r.code == 0);
+  CHECK(pdamp_cli({"study", "show", "1", "--db", db}, dir).out.find("  study file     " + file.string() + "\n") !=
+        std::string::npos);
+  std::filesystem::remove(file);
+  r = pdamp_cli({"study", "resume", "1", "--db", db}, dir);
+  CHECK(r.code == 0);
+  CHECK(r.out.find("  study file     " + file.string() + " (gone; the study is shown as stored)\n") !=
+        std::string::npos);
+  CHECK(count_rows(db, "SELECT count(*) FROM studies") == 1);
+  CHECK(count_rows(db, "SELECT count(*) FROM runs") == runs);
+}
+
 TEST_CASE("a study gives the same bits for any --jobs: every sample of every run, and the metrics") {
   test::TempDir dir("study-jobs");
   const auto file = dir / "both.ini";

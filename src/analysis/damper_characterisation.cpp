@@ -29,7 +29,7 @@ CharacterisationMetrics characterisation_metrics(const std::vector<Observation>&
   const double w = omega_rad_s;
   const HarmonicCycle all = first_harmonics(first, last);
   m.amplitude_m = all.amplitude_m();
-  m.gamma = gravity_m_s2 > 0.0 ? m.amplitude_m * w * w / gravity_m_s2 : 0.0;
+  if (gravity_m_s2 > 0.0) m.gamma = m.amplitude_m * w * w / gravity_m_s2;
   const ApparentLoad load = apparent_load(all, w);
   m.apparent_mass_kg = load.mass_kg;
   m.equivalent_damping_N_s_m = load.damping_N_s_m;

@@ -99,7 +99,7 @@ ResponseMetrics response_metrics(const std::vector<Observation>& boundaries, con
   const bool force = drive.mode == ExcitationMode::force;
   m.normalised_amplitude = m.amplitude_m / (force ? drive.level / drive.stiffness_N_m : drive.level);
   const double w = drive.omega_rad_s;
-  m.gamma = drive.gravity_m_s2 > 0.0 ? m.amplitude_m * w * w / drive.gravity_m_s2 : 0.0;
+  if (drive.gravity_m_s2 > 0.0) m.gamma = m.amplitude_m * w * w / drive.gravity_m_s2;
 
   const EnergyLedger &e0 = first.energy, &e1 = last.energy;
   m.impact_J_per_cycle = (e1.dissipated_impact_J - e0.dissipated_impact_J) / n;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -110,7 +111,7 @@ void print_frf_points(StudyStore& studies, std::int64_t id, std::ostream& out) {
           r->particle_mass_kg > 0 ? std::optional(m.apparent_mass_kg / r->particle_mass_kg) : std::nullopt;
       row.insert(row.end(),
                  {m.settled ? "yes" : "no", std::to_string(r->cycles_run), format_number(m.normalised_amplitude),
-                  format_number(m.phase_rad, 3), format_number(m.gamma, 3), format_optional(ratio, 3),
+                  format_number(m.phase_rad, 3), format_optional(m.gamma, 3), format_optional(ratio, 3),
                   format_number(m.equivalent_damping_N_s_m, 3), format_number(m.loss_factor, 3),
                   format_number(r->wall_time_s, 3)});
     } else {
@@ -156,7 +157,7 @@ void print_characterise_points(StudyStore& studies, std::int64_t id, std::ostrea
       const double m_p = r->particle_mass_kg;
       const double omega_rad_s = 2.0 * std::numbers::pi * c.place.frequency_hz;
       auto ratio = [&](double x, double by) { return m_p > 0 ? std::optional(x / by) : std::nullopt; };
-      row.insert(row.end(), {m.settled ? "yes" : "no", std::to_string(r->cycles_run), format_number(m.gamma, 3),
+      row.insert(row.end(), {m.settled ? "yes" : "no", std::to_string(r->cycles_run), format_optional(m.gamma, 3),
                              format_number(m.amplitude_m / r->free_height_m, 3),
                              format_optional(ratio(m.apparent_mass_kg, m_p), 3),
                              format_optional(ratio(m.equivalent_damping_N_s_m, m_p * omega_rad_s), 3),
@@ -172,13 +173,30 @@ void print_characterise_points(StudyStore& studies, std::int64_t id, std::ostrea
   for (const auto& message : messages) out << printable(message) << "\n";
 }
 
+/// How the files a stored study was read from stand now: "" while they still describe it,
+/// else why what is shown (the stored definition, which its points run) is not theirs.
+std::string files_note(const Study& stored) {
+  const auto& source = stored.source;
+  if (!std::filesystem::exists(source.study_path) || !std::filesystem::exists(source.scenario_path)) {
+    return " (gone; the study is shown as stored)";
+  }
+  try {
+    const auto differences = study_differences(stored, make_study(read_study_source(source.study_path), true));
+    if (differences.empty()) return "";
+    return " (now another study: " + differences.front() + (differences.size() > 1 ? "; ..." : "") +
+           "; the study is shown as stored)";
+  } catch (const InputError&) {
+    return " (unreadable now; the study is shown as stored)";
+  }
+}
+
 void print_study(StudyStore& studies, std::int64_t id, const Study& study, std::ostream& out) {
   const auto summary = studies.summary(id);
   out << "study " << id << " '" << printable(study.file.name) << "': models " << to_string(study.file.models) << ", "
       << summary->n_points << " points (" << summary->completed << " completed, " << summary->failed << " failed, "
       << summary->interrupted << " interrupted, " << summary->running << " running, " << summary->pending
-      << " pending)\n  study file     " << printable(study.source.study_path.string()) << "\n  base scenario  "
-      << printable(study.source.scenario_path.string()) << "\n";
+      << " pending)\n  study file     " << printable(study.source.study_path.string() + files_note(study))
+      << "\n  base scenario  " << printable(study.source.scenario_path.string()) << "\n";
   if (!study.file.frfs.empty()) {
     print_frf_points(studies, id, out);
     return;
@@ -328,7 +346,9 @@ int study_run(const std::vector<std::string>& args) {
   validate_study(study, snapshot_request(vm));
   RunStore store(vm["db"].as<std::string>());
   const std::int64_t id = find_or_create_study(store, study);
-  return run_and_report(store, id, study, runner);
+  // Reported as stored, which is what the points run: a study found by its name may have
+  // been read from another path, or with equal values written otherwise.
+  return run_and_report(store, id, stored_study(*StudyStore(store).study(id)), runner);
 }
 
 int study_resume(const std::vector<std::string>& args) {
@@ -462,7 +482,13 @@ int study_plot(const std::vector<std::string>& args) {
 void check_study_files(OpenStudy& open) {
   const auto& source = open.study.source;
   if (std::filesystem::exists(source.study_path) && std::filesystem::exists(source.scenario_path)) {
-    find_or_create_study(open.store, make_study(read_study_source(source.study_path), true));
+    // Compared with this study only: what the file holds now is never stored from here.
+    check_same_study(open.study, make_study(read_study_source(source.study_path), true),
+                     "study " + std::to_string(open.id) + " ('" + open.study.file.name + "' in '" +
+                         open.store.file().string() + "'): its study file '" + source.study_path.string() +
+                         "' now describes another study:",
+                     "restore the file to resume the study, or move it away to resume from the definition stored "
+                     "with the study; 'pdamp study run' stores the file's study as a study of its own");
   } else {
     std::cerr << "pdamp: the study's files are gone; resuming from the definition stored with it\n";
   }

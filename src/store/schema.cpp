@@ -640,6 +640,82 @@ ALTER TABLE runs ADD COLUMN bed_shift_z_m REAL;    -- NULL: the bed as stored
 ALTER TABLE runs ADD COLUMN bed_shift_v_m_s REAL;  -- with bed_shift_z_m: every sphere's z and vz moved by these
 )sql";
 
+/// Γ of a weightless point is NULL, as in cycles: X ω²/|g| is undefined without gravity
+/// (before, 0 was stored). The two metrics tables are rebuilt with the column nullable;
+/// an [frf] point's stored 0 becomes NULL (a driven host's X is never 0, so Γ was 0 only
+/// without gravity), a characterisation point's where its gravity_m_s2 is 0. The views
+/// that read them resolve to the new tables by name (legacy_alter_table).
+constexpr std::string_view v17_weightless_gamma = R"sql(
+PRAGMA legacy_alter_table = ON;
+CREATE TABLE study_frf_metrics_v17 (
+  study_id                  INTEGER NOT NULL,
+  point                     INTEGER NOT NULL,
+  run_id                    INTEGER NOT NULL UNIQUE REFERENCES runs (run_id) ON DELETE CASCADE,
+  settled                   INTEGER NOT NULL CHECK (settled IN (0, 1)),
+  cycles_to_steady          INTEGER NOT NULL,  -- cycles before the measured ones
+  cycles_run                INTEGER NOT NULL,
+  measured_cycles           INTEGER NOT NULL,
+  amplitude_m               REAL NOT NULL,  -- X of the first harmonic over the measured cycles
+  amplitude_spread_m        REAL NOT NULL,  -- max - min of the measured cycles' own X
+  phase_rad                 REAL NOT NULL,  -- of the host against the excitation; < 0: it lags
+  normalised_amplitude      REAL NOT NULL,  -- X/(F0/K) under a force, X/Y under base motion
+  gamma                     REAL,           -- X w^2 / |g|; NULL without gravity
+  impact_J_per_cycle        REAL NOT NULL,
+  friction_J_per_cycle      REAL NOT NULL,
+  viscous_J_per_cycle       REAL NOT NULL,  -- the host's damper
+  loss_factor               REAL NOT NULL,  -- D_cycle / (2 pi 1/2 K X_s^2), X_s the spring's stretch
+  apparent_mass_kg          REAL NOT NULL,
+  equivalent_damping_N_s_m  REAL NOT NULL,
+  particle_mass_kg          REAL NOT NULL,
+  wall_time_s               REAL NOT NULL,
+  PRIMARY KEY (study_id, point),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+INSERT INTO study_frf_metrics_v17
+SELECT study_id, point, run_id, settled, cycles_to_steady, cycles_run, measured_cycles, amplitude_m,
+       amplitude_spread_m, phase_rad, normalised_amplitude, nullif(gamma, 0), impact_J_per_cycle, friction_J_per_cycle,
+       viscous_J_per_cycle, loss_factor, apparent_mass_kg, equivalent_damping_N_s_m, particle_mass_kg, wall_time_s
+FROM study_frf_metrics;
+DROP TABLE study_frf_metrics;
+ALTER TABLE study_frf_metrics_v17 RENAME TO study_frf_metrics;
+
+CREATE TABLE study_characterise_metrics_v17 (
+  study_id                         INTEGER NOT NULL,
+  point                            INTEGER NOT NULL,
+  run_id                           INTEGER NOT NULL UNIQUE REFERENCES runs (run_id) ON DELETE CASCADE,
+  settled                          INTEGER NOT NULL CHECK (settled IN (0, 1)),
+  cycles_to_steady                 INTEGER NOT NULL,  -- cycles before the measured ones
+  cycles_run                       INTEGER NOT NULL,
+  measured_cycles                  INTEGER NOT NULL,
+  amplitude_m                      REAL NOT NULL,  -- the container's first harmonic, as measured
+  gamma                            REAL,           -- A w^2 / |g|; NULL without gravity
+  apparent_mass_kg                 REAL NOT NULL,  -- F_p,1 = -m_app z'' - c_eq z'
+  apparent_mass_spread_kg          REAL NOT NULL,  -- standard deviation of the measured cycles' own values
+  equivalent_damping_N_s_m         REAL NOT NULL,
+  equivalent_damping_spread_N_s_m  REAL NOT NULL,
+  impact_J_per_cycle               REAL NOT NULL,
+  friction_J_per_cycle             REAL NOT NULL,
+  loss_factor                      REAL NOT NULL,  -- D_cycle / (2 pi 1/2 m_p (w A)^2); 0 without particles
+  floor_contact_fraction           REAL NOT NULL,  -- of 64 instants a measured cycle, a sphere touching the floor
+  lid_contact_fraction             REAL NOT NULL,  -- and the lid
+  particle_mass_kg                 REAL NOT NULL,
+  gravity_m_s2                     REAL NOT NULL,  -- |g|
+  free_height_m                    REAL NOT NULL,  -- L: the cavity's height above the settled bed's top
+  wall_time_s                      REAL NOT NULL,
+  PRIMARY KEY (study_id, point),
+  FOREIGN KEY (study_id, point) REFERENCES study_points (study_id, point) ON DELETE CASCADE
+) STRICT, WITHOUT ROWID;
+INSERT INTO study_characterise_metrics_v17
+SELECT study_id, point, run_id, settled, cycles_to_steady, cycles_run, measured_cycles, amplitude_m,
+       CASE WHEN gravity_m_s2 > 0 THEN gamma END, apparent_mass_kg, apparent_mass_spread_kg, equivalent_damping_N_s_m,
+       equivalent_damping_spread_N_s_m, impact_J_per_cycle, friction_J_per_cycle, loss_factor, floor_contact_fraction,
+       lid_contact_fraction, particle_mass_kg, gravity_m_s2, free_height_m, wall_time_s
+FROM study_characterise_metrics;
+DROP TABLE study_characterise_metrics;
+ALTER TABLE study_characterise_metrics_v17 RENAME TO study_characterise_metrics;
+PRAGMA legacy_alter_table = OFF;
+)sql";
+
 std::string study_frf_view(std::string_view grid_column) {
   return std::string(study_frf_view_head) + std::string(grid_column) + std::string(study_frf_view_tail);
 }
@@ -649,7 +725,7 @@ std::string study_frf_view(std::string_view grid_column) {
 std::span<const std::string_view> migrations() {
   static const std::string v11 = std::string(v11_frf_studies) + study_frf_view("");
   static const std::string v15 = std::string(v15_frf_grids) + study_frf_view("f.grid, ");
-  static const std::array<std::string_view, 16> all{v1_runs_samples_cycles,
+  static const std::array<std::string_view, 17> all{v1_runs_samples_cycles,
                                                     v2_run_statistics,
                                                     v3_initial_states,
                                                     v4_comparisons,
@@ -664,7 +740,8 @@ std::span<const std::string_view> migrations() {
                                                     v13_characterisation,
                                                     v14_comparison_runs,
                                                     v15,
-                                                    v16_bed_shift};
+                                                    v16_bed_shift,
+                                                    v17_weightless_gamma};
   return all;
 }
 

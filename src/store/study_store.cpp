@@ -390,19 +390,19 @@ std::int64_t StudyStore::complete_frf_point(std::int64_t study_id, int point, in
         "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     metrics.bind(1, study_id).bind(2, point).bind(3, r.run_id).bind(4, static_cast<std::int64_t>(m.settled));
     metrics.bind(5, m.cycles_to_steady).bind(6, r.cycles_run).bind(7, m.measured_cycles);
-    const double values[] = {m.amplitude_m,
-                             m.amplitude_spread_m,
-                             m.phase_rad,
-                             m.normalised_amplitude,
-                             m.gamma,
-                             m.impact_J_per_cycle,
-                             m.friction_J_per_cycle,
-                             m.viscous_J_per_cycle,
-                             m.loss_factor,
-                             m.apparent_mass_kg,
-                             m.equivalent_damping_N_s_m,
-                             r.particle_mass_kg,
-                             r.wall_time_s};
+    const std::optional<double> values[] = {m.amplitude_m,
+                                            m.amplitude_spread_m,
+                                            m.phase_rad,
+                                            m.normalised_amplitude,
+                                            m.gamma,
+                                            m.impact_J_per_cycle,
+                                            m.friction_J_per_cycle,
+                                            m.viscous_J_per_cycle,
+                                            m.loss_factor,
+                                            m.apparent_mass_kg,
+                                            m.equivalent_damping_N_s_m,
+                                            r.particle_mass_kg,
+                                            r.wall_time_s};
     for (int k = 0; k < 13; ++k) metrics.bind(8 + k, values[k]);
     metrics.run();
     return store_end_and_complete(study_id, point, attempt,
@@ -425,21 +425,21 @@ std::int64_t StudyStore::complete_characterise_point(std::int64_t study_id, int 
         "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     metrics.bind(1, study_id).bind(2, point).bind(3, r.run_id).bind(4, static_cast<std::int64_t>(m.settled));
     metrics.bind(5, m.cycles_to_steady).bind(6, r.cycles_run).bind(7, m.measured_cycles);
-    const double values[] = {m.amplitude_m,
-                             m.gamma,
-                             m.apparent_mass_kg,
-                             m.apparent_mass_spread_kg,
-                             m.equivalent_damping_N_s_m,
-                             m.equivalent_damping_spread_N_s_m,
-                             m.impact_J_per_cycle,
-                             m.friction_J_per_cycle,
-                             m.loss_factor,
-                             m.floor_contact_fraction,
-                             m.lid_contact_fraction,
-                             r.particle_mass_kg,
-                             r.gravity_m_s2,
-                             r.free_height_m,
-                             r.wall_time_s};
+    const std::optional<double> values[] = {m.amplitude_m,
+                                            m.gamma,
+                                            m.apparent_mass_kg,
+                                            m.apparent_mass_spread_kg,
+                                            m.equivalent_damping_N_s_m,
+                                            m.equivalent_damping_spread_N_s_m,
+                                            m.impact_J_per_cycle,
+                                            m.friction_J_per_cycle,
+                                            m.loss_factor,
+                                            m.floor_contact_fraction,
+                                            m.lid_contact_fraction,
+                                            r.particle_mass_kg,
+                                            r.gravity_m_s2,
+                                            r.free_height_m,
+                                            r.wall_time_s};
     for (int k = 0; k < 15; ++k) metrics.bind(8 + k, values[k]);
     metrics.run();
     return store_end_and_complete(study_id, point, attempt,
@@ -483,8 +483,8 @@ namespace {
 /// study_frf view's), selected in this order from column `first` of `q` on.
 constexpr std::string_view frf_metric_columns =
     "run_id, settled, cycles_to_steady, cycles_run, measured_cycles, amplitude_m, amplitude_spread_m, phase_rad, "
-    "normalised_amplitude, gamma, impact_J_per_cycle, friction_J_per_cycle, viscous_J_per_cycle, loss_factor, "
-    "apparent_mass_kg, equivalent_damping_N_s_m, particle_mass_kg, wall_time_s";
+    "normalised_amplitude, impact_J_per_cycle, friction_J_per_cycle, viscous_J_per_cycle, loss_factor, "
+    "apparent_mass_kg, equivalent_damping_N_s_m, particle_mass_kg, wall_time_s, gamma";
 
 FrfPointResult read_frf_metrics(const sqlite::Statement& q, int first) {
   FrfPointResult m;
@@ -497,7 +497,6 @@ FrfPointResult read_frf_metrics(const sqlite::Statement& q, int first) {
                       &m.metrics.amplitude_spread_m,
                       &m.metrics.phase_rad,
                       &m.metrics.normalised_amplitude,
-                      &m.metrics.gamma,
                       &m.metrics.impact_J_per_cycle,
                       &m.metrics.friction_J_per_cycle,
                       &m.metrics.viscous_J_per_cycle,
@@ -506,7 +505,8 @@ FrfPointResult read_frf_metrics(const sqlite::Statement& q, int first) {
                       &m.metrics.equivalent_damping_N_s_m,
                       &m.particle_mass_kg,
                       &m.wall_time_s};
-  for (int k = 0; k < 13; ++k) *values[k] = q.column_double(first + 5 + k);
+  for (int k = 0; k < 12; ++k) *values[k] = q.column_double(first + 5 + k);
+  m.metrics.gamma = q.column_optional_double(first + 17);  // NULL without gravity
   return m;
 }
 
@@ -551,10 +551,10 @@ std::vector<CharacterisePointRecord> StudyStore::characterise_points(std::int64_
   sqlite::Statement q(db(),
                       "SELECT point, status, curve, model, empty, amplitude_m, gamma_given, frequency_hz, step, "
                       "coalesce(previous_point, 0), run_id, settled, cycles_to_steady, cycles_run, measured_cycles, "
-                      "gamma, apparent_mass_kg, apparent_mass_spread_kg, equivalent_damping_N_s_m, "
+                      "apparent_mass_kg, apparent_mass_spread_kg, equivalent_damping_N_s_m, "
                       "equivalent_damping_spread_N_s_m, impact_J_per_cycle, friction_J_per_cycle, loss_factor, "
                       "floor_contact_fraction, lid_contact_fraction, particle_mass_kg, gravity_m_s2, free_height_m, "
-                      "wall_time_s, measured_amplitude_m FROM study_characterisation WHERE study_id = ? "
+                      "wall_time_s, measured_amplitude_m, gamma FROM study_characterisation WHERE study_id = ? "
                       "ORDER BY point");
   q.bind(1, study_id);
   std::vector<CharacterisePointRecord> rows;
@@ -577,8 +577,7 @@ std::vector<CharacterisePointRecord> StudyStore::characterise_points(std::int64_
       m.metrics.cycles_to_steady = static_cast<int>(q.column_int(12));
       m.cycles_run = static_cast<int>(q.column_int(13));
       m.metrics.measured_cycles = static_cast<int>(q.column_int(14));
-      double* values[] = {&m.metrics.gamma,
-                          &m.metrics.apparent_mass_kg,
+      double* values[] = {&m.metrics.apparent_mass_kg,
                           &m.metrics.apparent_mass_spread_kg,
                           &m.metrics.equivalent_damping_N_s_m,
                           &m.metrics.equivalent_damping_spread_N_s_m,
@@ -592,7 +591,8 @@ std::vector<CharacterisePointRecord> StudyStore::characterise_points(std::int64_
                           &m.free_height_m,
                           &m.wall_time_s,
                           &m.metrics.amplitude_m};
-      for (int k = 0; k < 15; ++k) *values[k] = q.column_double(15 + k);
+      for (int k = 0; k < 14; ++k) *values[k] = q.column_double(15 + k);
+      m.metrics.gamma = q.column_optional_double(29);  // NULL without gravity
       r.result = m;
     }
     rows.push_back(std::move(r));

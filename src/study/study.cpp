@@ -1,11 +1,15 @@
 #include "pdamp/study/study.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cstdint>
 #include <cstdio>
 #include <map>
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 #include "pdamp/errors.hpp"
 #include "pdamp/input_file.hpp"
@@ -237,8 +241,57 @@ std::map<std::string, std::string> canonical_lines(const std::string& canonical)
   return lines;
 }
 
+/// Whether two words are the same number (each as the scenario loader reads it: an integer
+/// exactly, beyond a double's digits too; else a double, bit for bit) or the same text.
+bool same_word(std::string_view a, std::string_view b) {
+  if (a == b) return true;
+  const auto integer = [](std::string_view w) -> std::optional<std::string_view> {
+    const std::string_view digits = w.starts_with('-') ? w.substr(1) : w;
+    if (digits.empty() || !std::all_of(digits.begin(), digits.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      return std::nullopt;
+    }
+    const auto first = std::min(digits.find_first_not_of('0'), digits.size() - 1);
+    return digits.substr(first);
+  };
+  if (const auto x = integer(a), y = integer(b); x && y) return *x == *y && a.starts_with('-') == b.starts_with('-');
+  const auto number = [](std::string_view w) -> std::optional<double> {
+    double x = 0.0;
+    const auto [ptr, ec] = std::from_chars(w.data(), w.data() + w.size(), x);
+    if (ec != std::errc() || ptr != w.data() + w.size()) return std::nullopt;
+    return x;
+  };
+  const auto x = number(a), y = number(b);
+  return x && y && std::bit_cast<std::uint64_t>(*x) == std::bit_cast<std::uint64_t>(*y);
+}
+
+/// The words of a text and the separators between them ("," where one holds a comma, a
+/// line break, else " "), so that lists and lines keep their shape.
+std::vector<std::string_view> words(std::string_view text) {
+  constexpr std::string_view blanks = " \t\r\n,";
+  std::vector<std::string_view> out;
+  for (std::size_t i = 0; i < text.size();) {
+    const bool blank = blanks.find(text[i]) != std::string_view::npos;
+    const std::size_t end =
+        std::min(blank ? text.find_first_not_of(blanks, i) : text.find_first_of(blanks, i), text.size());
+    const std::string_view run = text.substr(i, end - i);
+    out.push_back(!blank                                     ? run
+                  : run.find(',') != std::string_view::npos  ? std::string_view(",")
+                  : run.find('\n') != std::string_view::npos ? std::string_view("\n")
+                                                             : std::string_view(" "));
+    i = end;
+  }
+  return out;
+}
+
+/// Whether two texts say the same: word for word, numbers by value (`0.10` is `0.1`,
+/// `1e-1` too), so that equal values written otherwise are no difference.
+bool same_values(std::string_view a, std::string_view b) {
+  const auto x = words(a), y = words(b);
+  return std::equal(x.begin(), x.end(), y.begin(), y.end(), same_word);
+}
+
 void differ(std::vector<std::string>& out, const std::string& what, const std::string& now, const std::string& stored) {
-  if (now != stored) out.push_back(what + ": '" + now + "' now, '" + stored + "' stored");
+  if (!same_values(now, stored)) out.push_back(what + ": '" + now + "' now, '" + stored + "' stored");
 }
 
 /// Each grid key's values (as expanded) and zip partners, keyed by "[section] key".
@@ -263,10 +316,17 @@ std::map<std::string, std::string> sweep_keys(const StudyFile& file) {
   return keys;
 }
 
-std::string describe_criterion(const SteadyStateCriterion& c) {
-  return std::to_string(c.consecutive_cycles) + " cycles within " + exact(c.amplitude_tolerance) + " and " +
-         exact(c.phase_tolerance_rad) + " rad, cycles " + std::to_string(c.min_cycles) + " to " +
-         std::to_string(c.max_cycles) + ", " + std::to_string(c.measured_cycles) + " measured";
+/// The keys of an [frf] or [characterise] section that set no scenario key: where its
+/// points start and when they are steady, each resolved (defaults included).
+void add_steady_keys(const std::string& prefix, FrfStart start, const SteadyStateCriterion& c,
+                     std::map<std::string, std::string>& keys) {
+  keys[prefix + "start"] = to_string(start);
+  keys[prefix + "consecutive_cycles"] = std::to_string(c.consecutive_cycles);
+  keys[prefix + "amplitude_tolerance"] = exact(c.amplitude_tolerance);
+  keys[prefix + "phase_tolerance_rad"] = exact(c.phase_tolerance_rad);
+  keys[prefix + "min_cycles"] = std::to_string(c.min_cycles);
+  keys[prefix + "max_cycles"] = std::to_string(c.max_cycles);
+  keys[prefix + "measured_cycles"] = std::to_string(c.measured_cycles);
 }
 
 /// Each [frf] section's settings, keyed by "[section] key".
@@ -284,9 +344,8 @@ std::map<std::string, std::string> frf_keys(const StudyFile& file) {
     keys[s + "frequencies"] = join(f.frequencies);
     keys[s + "direction"] = to_string(f.direction);
     keys[s + "host_alone"] = f.host_alone ? "true" : "false";
-    keys[s + "start"] = to_string(f.start);
     keys[s + "models"] = f.models ? to_string(*f.models) : "(the study's)";
-    keys[s + "steady state"] = describe_criterion(f.criterion);
+    add_steady_keys(s, f.start, f.criterion, keys);
     for (const auto& [key, value] : f.settings) keys[s + key] = value;
     add_grid_keys(f.grid, keys);
   }
@@ -305,10 +364,9 @@ std::map<std::string, std::string> characterise_keys(const StudyFile& file) {
     const std::string s = "[" + c.section + "] ";
     keys[s + (c.axis == AmplitudeAxis::gamma ? "gammas" : "amplitudes")] = join(c.amplitudes);
     keys[s + "frequencies"] = join(c.frequencies);
-    keys[s + "start"] = to_string(c.start);
     keys[s + "empty"] = c.empty ? "true" : "false";
     keys[s + "models"] = c.models ? to_string(*c.models) : "(the study's)";
-    keys[s + "steady state"] = describe_criterion(c.criterion);
+    add_steady_keys(s, c.start, c.criterion, keys);
     for (const auto& [key, value] : c.settings) keys[s + key] = value;
   }
   return keys;
@@ -325,10 +383,20 @@ void map_differences(std::vector<std::string>& out, const std::string& prefix,
   }
 }
 
+/// What a point computes: its place, its scenario and, on a curve, how it starts and
+/// settles (which its scenario does not say: the run lasts max_cycles + measured_cycles).
 std::vector<std::string> canonical_points(const Study& study) {
   std::vector<std::string> texts;
   for (const auto& p : study.points) {
-    texts.push_back(p.section + "\n" + describe_curve(p) + "\n" + point_scenario(study, p).canonical_text);
+    std::map<std::string, std::string> steady;
+    if (p.frf) add_steady_keys("", study.file.frfs.at(p.frf->section).start, point_criterion(study, p), steady);
+    if (p.characterise) {
+      add_steady_keys("", study.file.characterisations.at(p.characterise->section).start, point_criterion(study, p),
+                      steady);
+    }
+    std::string text = p.section + "\n" + describe_curve(p) + "\n";
+    for (const auto& [key, value] : steady) text += key + " = " + value + "\n";
+    texts.push_back(text + point_scenario(study, p).canonical_text);
   }
   return texts;
 }
@@ -440,8 +508,15 @@ void validate_study(const Study& study, const std::optional<SnapshotSettings>& s
 }
 
 std::vector<std::string> study_differences(const Study& stored, const Study& now) {
-  if (stored.file.models == now.file.models && canonical_points(stored) == canonical_points(now)) return {};
+  const auto stored_points = canonical_points(stored), now_points = canonical_points(now);
+  if (stored.file.name == now.file.name && stored.file.models == now.file.models &&
+      std::equal(now_points.begin(), now_points.end(), stored_points.begin(), stored_points.end(), same_values)) {
+    return {};
+  }
   std::vector<std::string> out;
+  if (now.file.name != stored.file.name) {
+    out.push_back("[study] name: '" + now.file.name + "' now, '" + stored.file.name + "' stored");
+  }
   differ(out, "[study] models", std::string(to_string(now.file.models)), std::string(to_string(stored.file.models)));
   map_differences(out, "", sweep_keys(now.file), sweep_keys(stored.file));
   map_differences(out, "", frf_keys(now.file), frf_keys(stored.file));

@@ -361,16 +361,19 @@ NewStudyPoint stored_point(const Study& study, const StudyPoint& point) {
   return {point.point, point.section, point.values, frf_row(study, point), characterise_row(point)};
 }
 
+void check_same_study(const Study& stored, const Study& now, const std::string& what, const std::string& way_out) {
+  const auto differences = study_differences(stored, now);
+  if (!differences.empty()) throw InputError(what + join_lines(differences) + "\n" + way_out);
+}
+
 std::int64_t find_or_create_study(RunStore& store, const Study& study) {
   StudyStore studies(store);
   for (int tries = 0;; ++tries) {
     if (const auto record = studies.find_study(study.file.name)) {
-      const auto differences = study_differences(stored_study(*record), study);
-      if (!differences.empty()) {
-        throw InputError("study '" + study.file.name + "' (study " + std::to_string(record->study_id) + " in '" +
-                         store.file().string() + "') was made from another definition:" + join_lines(differences) +
-                         "\nrun it unchanged to resume it, or give this one another [study] name or --db");
-      }
+      check_same_study(stored_study(*record), study,
+                       "study '" + study.file.name + "' (study " + std::to_string(record->study_id) + " in '" +
+                           store.file().string() + "') was made from another definition:",
+                       "run it unchanged to resume it, or give this one another [study] name or --db");
       return record->study_id;
     }
     std::vector<NewStudyPoint> points;

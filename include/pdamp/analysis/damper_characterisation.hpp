@@ -5,6 +5,7 @@
 /// c_eq z' (analysis/frf_response.hpp's apparent_load), with the losses per cycle and the
 /// spread of the per-cycle values.
 
+#include <optional>
 #include <vector>
 
 #include "pdamp/analysis/frf_response.hpp"
@@ -16,8 +17,8 @@ struct CharacterisationMetrics {
   bool settled = false;
   int cycles_to_steady = 0;  ///< cycles run before the measured ones (not settled: all but the last n)
   int measured_cycles = 0;
-  double amplitude_m = 0.0;  ///< the container's first harmonic over the measured cycles (A, as measured)
-  double gamma = 0.0;        ///< A ω² / |g| (0 without gravity)
+  double amplitude_m = 0.0;     ///< the container's first harmonic over the measured cycles (A, as measured)
+  std::optional<double> gamma;  ///< A ω² / |g|; none without gravity, where Γ is undefined
   double apparent_mass_kg = 0.0, equivalent_damping_N_s_m = 0.0;  ///< over the measured cycles together
   /// The standard deviation of the measured cycles' own values: how steady the point is.
   double apparent_mass_spread_kg = 0.0, equivalent_damping_spread_N_s_m = 0.0;

@@ -13,6 +13,7 @@
 ///   spring's stretch amplitude: X under a force, |z₁ − y| under base motion (the spring
 ///   stores ½ K (z − y)²). The host alone gives η = C ω / K in both modes.
 
+#include <optional>
 #include <vector>
 
 #include "pdamp/model/host.hpp"
@@ -97,7 +98,7 @@ struct ResponseMetrics {
   double amplitude_spread_m = 0.0;  ///< max − min of the measured cycles' own X
   double phase_rad = 0.0;
   double normalised_amplitude = 0.0;  ///< X / (F0/K) under a force, X / Y under base motion
-  double gamma = 0.0;                 ///< X ω² / |g| (0 without gravity)
+  std::optional<double> gamma;        ///< X ω² / |g|; none without gravity, where Γ is undefined
   double impact_J_per_cycle = 0.0, friction_J_per_cycle = 0.0, viscous_J_per_cycle = 0.0;
   double loss_factor = 0.0;
   double apparent_mass_kg = 0.0, equivalent_damping_N_s_m = 0.0;

@@ -117,8 +117,10 @@ const SteadyStateCriterion& point_criterion(const Study& study, const StudyPoint
 void validate_study(const Study& study, const std::optional<SnapshotSettings>& snapshots = {});
 
 /// What differs between a stored study and the same study read now, one line per
-/// difference (empty if they would run the same points): the [study] keys, each sweep
-/// key's values (compared as expanded), and the base scenario's resolved keys.
+/// difference (empty if they would run the same points): the [study] keys, each key of
+/// the sweep, [frf] and [characterise] sections (values compared as expanded, steady-state
+/// keys and start resolved), and the base scenario's resolved keys. Numbers are compared
+/// by value (`0.10` and `1e-1` are `0.1`).
 std::vector<std::string> study_differences(const Study& stored, const Study& now);
 
 /// "key = value, key = value" of a point.

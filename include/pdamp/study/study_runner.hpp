@@ -66,6 +66,10 @@ struct StudyRunReport {
 /// A point as the store records it: its values and, on a curve, its place there.
 NewStudyPoint stored_point(const Study& study, const StudyPoint& point);
 
+/// Throws InputError, `what`, every difference (study_differences) a line, then `way_out`,
+/// if `now` would run other points than `stored`.
+void check_same_study(const Study& stored, const Study& now, const std::string& what, const std::string& way_out);
+
 /// Finds the study of this name in the store, or stores it with its points. Throws
 /// InputError, writing nothing, if a stored study of this name would run other points,
 /// naming every difference. Returns the study's id.

@@ -172,6 +172,8 @@ TEST_CASE("bad input exits with code 2, names the problem and writes nothing") {
       {{"run", "--scen", table1(), "--model", "hard", "--db", db.string()}, "unrecognised option '--scen'"},
       {{"rom", "--tab", "x.csv"}, "unrecognised option '--tab'"},
       {{"keys", "extra"}, "pdamp keys takes no arguments, not 'extra'"},
+      {{"show", "--db", db.string()}, "pdamp show: RUN_ID is required"},
+      {{"study", "show", "--db", db.string()}, "pdamp study show: STUDY_ID is required"},
       {{"--version", "extra"}, "--version takes no arguments, not 'extra'"},
   };
   for (const auto& c : cases) {

@@ -391,4 +391,14 @@ TEST_CASE("pdamp study plot draws a metric against the swept key") {
   CHECK(bad.code == 2);
   CHECK(bad.err.find("'nonsense' is not a metric") != std::string::npos);
   CHECK(pdamp_cli({"study", "plot", "2", "--db", db}, dir).code == 2);
+  // A picture it could not write, or in a format it does not draw: refused before plotting.
+  for (const auto& [out, expected] :
+       {std::pair<std::string, std::string>{(dir / "no" / "plot.png").string(), "does not exist"},
+        {(dir / "plot.txt").string(), "name the picture .png, .svg or .pdf"},
+        {(dir / "plot").string(), "name the picture .png, .svg or .pdf"}}) {
+    CAPTURE(out);
+    const Result refused = pdamp_cli({"study", "plot", "1", "--db", db, "--out", out}, dir);
+    CHECK(refused.code == 2);
+    CHECK(refused.err.find(expected) != std::string::npos);
+  }
 }

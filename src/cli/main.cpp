@@ -145,13 +145,13 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   if (command == "resume") {
     po::options_description options("pdamp resume RUN_ID [--until T] [--db FILE]");
     options.add(help).add(db_option()).add(checkpoint_option());
-    options.add_options()("run-id", po::value<std::string>(), "run to continue")(
+    options.add_options()("RUN_ID", po::value<std::string>(), "run to continue")(
         "until", po::value<std::string>()->value_name("T"),
         "simulated time to run to (s), beyond the run's end: extends a completed run; the result is the same bits "
         "as a run of that duration")("threads", po::value<std::string>(),
                                      "threads for the soft engine (default: one per core); the same bits for any");
     po::positional_options_description positional;
-    positional.add("run-id", 1);
+    positional.add("RUN_ID", 1);
     po::options_description accepted;  // the snapshot options only to refuse them with the reason
     accepted.add(options).add(snapshot_options());
     const po::variables_map vm = parse_options(args, accepted, positional).vm;
@@ -166,7 +166,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
                        "folder (where the frames up to its checkpoint are, which its .pvd lists), and a run started "
                        "without takes none (docs/checkpoints.md)");
     }
-    const std::string run_id = required_option(vm, "run-id", command);
+    const std::string run_id = required_option(vm, "RUN_ID", command);
     const std::optional<double> until =
         vm.count("until") ? std::optional(parse_seconds(vm["until"].as<std::string>(), 0.0, false, 1e9, "--until"))
                           : std::nullopt;
@@ -177,30 +177,30 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   if (command == "show") {
     po::options_description options("pdamp show RUN_ID [--db FILE]");
     options.add(help).add(db_option());
-    options.add_options()("run-id", po::value<std::string>(), "run to show");
+    options.add_options()("RUN_ID", po::value<std::string>(), "run to show");
     po::positional_options_description positional;
-    positional.add("run-id", 1);
+    positional.add("RUN_ID", 1);
     const po::variables_map vm = parse_options(args, options, positional).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
     }
-    return show_run_command(required_option(vm, "run-id", command), vm["db"].as<std::string>());
+    return show_run_command(required_option(vm, "RUN_ID", command), vm["db"].as<std::string>());
   }
   if (command == "delete") {
     po::options_description options("pdamp delete RUN_ID... [--db FILE] [--force]");
     options.add(help).add(db_option());
-    options.add_options()("run-id", po::value<std::vector<std::string>>(), "runs to delete")(
+    options.add_options()("RUN_ID", po::value<std::vector<std::string>>(), "runs to delete")(
         "force", "also delete runs marked running (killed runs stay so; a run still going then fails)");
     po::positional_options_description positional;
-    positional.add("run-id", -1);
+    positional.add("RUN_ID", -1);
     const po::variables_map vm = parse_options(args, options, positional).vm;
     if (vm.count("help")) {
       std::cout << options << "\n";
       return 0;
     }
-    if (!vm.count("run-id")) throw InputError("pdamp delete: give the RUN_IDs to delete (see 'pdamp runs')");
-    return delete_runs_command(vm["run-id"].as<std::vector<std::string>>(), vm["db"].as<std::string>(),
+    if (!vm.count("RUN_ID")) throw InputError("pdamp delete: give the RUN_IDs to delete (see 'pdamp runs')");
+    return delete_runs_command(vm["RUN_ID"].as<std::vector<std::string>>(), vm["db"].as<std::string>(),
                                vm.count("force") > 0);
   }
   if (command == "check") {

@@ -1,5 +1,8 @@
 #include "options.hpp"
 
+#include <unistd.h>
+
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -42,8 +45,22 @@ CommandLine parse_options(const std::vector<std::string>& args, const po::option
   return line;
 }
 
+void check_writable_output(const std::filesystem::path& file, const std::string& option) {
+  const auto folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+  const std::string named = option + " '" + file.string() + "'";
+  if (!std::filesystem::is_directory(folder)) {
+    throw InputError(named + ": folder '" + folder.string() + "' does not exist");
+  }
+  if (std::filesystem::exists(file) ? access(file.c_str(), W_OK) != 0 : access(folder.c_str(), W_OK | X_OK) != 0) {
+    throw InputError(named + ": " + (std::filesystem::exists(file) ? "the file" : "folder '" + folder.string() + "'") +
+                     " is not writable by this user");
+  }
+}
+
 std::string required_option(const po::variables_map& vm, const std::string& name, const std::string& command) {
-  if (!vm.count(name)) throw InputError("pdamp " + command + ": --" + name + " is required");
+  // Positional arguments are named in capitals (RUN_ID, STUDY.ini), as the usage shows them.
+  const bool positional = std::isupper(static_cast<unsigned char>(name.front())) != 0;
+  if (!vm.count(name)) throw InputError("pdamp " + command + ": " + (positional ? "" : "--") + name + " is required");
   return vm[name].as<std::string>();
 }
 

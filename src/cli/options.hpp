@@ -3,6 +3,7 @@
 
 #include <boost/program_options.hpp>
 #include <chrono>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -28,6 +29,10 @@ struct CommandLine {
 CommandLine parse_options(const std::vector<std::string>& args,
                           const boost::program_options::options_description& options,
                           const boost::program_options::positional_options_description& positional = {});
+
+/// An output file's folder exists and this user may write the file there: checked before
+/// any work, so that a bad name leaves nothing written. InputError naming `option`.
+void check_writable_output(const std::filesystem::path& file, const std::string& option);
 
 /// The option's value; InputError naming the command if it is missing.
 std::string required_option(const boost::program_options::variables_map& vm, const std::string& name,

@@ -64,10 +64,7 @@ std::vector<std::string> files(const po::variables_map& vm, const std::string& o
 /// Checked before any work so that a bad name leaves nothing written.
 void check_output(const std::filesystem::path& file, const std::string& what) {
   rom::file_format(file, what);
-  const auto folder = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
-  if (!std::filesystem::is_directory(folder)) {
-    throw InputError(what + " '" + file.string() + "': folder '" + folder.string() + "' does not exist");
-  }
+  check_writable_output(file, what);
 }
 
 /// The damper table of a completed characterisation: one model and one section (one bed), on

@@ -446,6 +446,14 @@ int study_plot(const std::vector<std::string>& args) {
       "out", po::value<std::string>(), "the picture (default: study-ID.png)");
   if (!command.parse(args)) return 0;
   const auto& vm = command.vm();
+  if (vm.count("out")) {
+    const std::filesystem::path out = vm["out"].as<std::string>();
+    const std::string extension = out.extension().string();
+    if (extension != ".png" && extension != ".svg" && extension != ".pdf") {
+      throw InputError("--out '" + out.string() + "': name the picture .png, .svg or .pdf");
+    }
+    check_writable_output(out, "--out");
+  }
   const OpenStudy open(vm, "study plot", StoreAccess::read);
   const std::int64_t id = open.id;
   const bool frf = !open.study.file.frfs.empty();

@@ -609,7 +609,7 @@ void describe_scenario_keys(std::ostream& out) {
       out << "\n[" << sec << "]\n";
       section = sec;
     }
-    const std::string default_text = spec.inherits.empty() ? spec.default_text : "= " + spec.inherits;
+    const std::string default_text = spec.inherits.empty() ? spec.default_text : "as " + spec.inherits;
     out << "  " << spec.key << " = " << (default_text.empty() ? "(none)" : default_text);
     if (!spec.unit.empty()) out << " [" << spec.unit << "]";
     out << "\n      " << spec.help << "\n";

@@ -125,6 +125,21 @@ TEST_CASE("a new store gets the current schema in WAL mode") {
   CHECK(keys.column_int(0) == 1);
 }
 
+TEST_CASE("a run another process deleted while it ran: its writes fail naming that, not on a foreign key") {
+  test::TempDir dir("store-deleted-run");
+  RunStore store(dir / "runs.sqlite");
+  const auto id = store.begin_run(a_run());
+  store.start_run(id, {2.5e-6, std::nullopt, 0.1});
+  const std::int64_t ids[] = {id};
+  RunStore(dir / "runs.sqlite").delete_runs(ids, true);
+  const std::string why = "run " + std::to_string(id) + " is no longer in the store";
+  const SampleRecord samples[] = {{sample_at(0.0), 0.0}};
+  CHECK_THROWS_WITH_AS(store.append_results(id, samples, {}, nullptr), doctest::Contains(why.c_str()), RuntimeFailure);
+  CHECK_THROWS_WITH_AS(store.save_statistics(id, {{"events", 1}}), doctest::Contains(why.c_str()), RuntimeFailure);
+  // Its end would otherwise update no row, silently.
+  CHECK_THROWS_WITH_AS(store.finish_run(id, RunEnd{}), doctest::Contains(why.c_str()), RuntimeFailure);
+}
+
 TEST_CASE("runs, samples and cycles round-trip through the public tables and view") {
   test::TempDir dir("store-roundtrip");
   RunStore store(dir / "runs.sqlite");

@@ -269,8 +269,18 @@ std::int64_t RunStore::begin_run(const NewRun& run) {
   });
 }
 
+void RunStore::require_run(std::int64_t run_id) {
+  sqlite::Statement query(*db_, "SELECT 1 FROM runs WHERE run_id = ?");
+  query.bind(1, run_id);
+  if (query.step()) return;
+  throw RuntimeFailure("run " + std::to_string(run_id) + " is no longer in the store '" + db_->file().string() +
+                       "': another process deleted it while it ran (pdamp delete --force); what it computed since "
+                       "its last write is not stored");
+}
+
 void RunStore::start_run(std::int64_t run_id, const RunStart& start) {
   sqlite::write_transaction(*db_, [&] {
+    require_run(run_id);
     sqlite::Statement update(*db_,
                              "UPDATE runs SET dt_s = ?, initial_state_id = ?, bed_shift_z_m = ?, bed_shift_v_m_s = ?, "
                              "solid_fraction = ? WHERE run_id = ?");
@@ -288,6 +298,7 @@ void RunStore::start_run(std::int64_t run_id, const RunStart& start) {
 void RunStore::append_results(std::int64_t run_id, std::span<const SampleRecord> samples,
                               std::span<const CycleRecord> cycles, const RunCheckpoint* checkpoint) {
   sqlite::write_transaction(*db_, [&] {
+    require_run(run_id);
     sqlite::Statement sample(*db_, "INSERT INTO samples (run_id, " + std::string(sample_columns) +
                                        ") VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     for (const SampleRecord& s : samples) insert_sample(sample, run_id, s);
@@ -366,6 +377,7 @@ Particles RunStore::load_initial_particles(std::int64_t state_id) {
 
 void RunStore::finish_run(std::int64_t run_id, const RunEnd& end) {
   sqlite::write_transaction(*db_, [&] {
+    require_run(run_id);
     sqlite::Statement update(*db_,
                              "UPDATE runs SET status = ?, message = ?, sim_time_s = ?, wall_time_s = ?, "
                              "initial_energy_J = ?, energy_balance_rel_err = ?, ended_at = ?, lease_host = NULL, "
@@ -384,6 +396,7 @@ void RunStore::finish_run(std::int64_t run_id, const RunEnd& end) {
 
 void RunStore::save_statistics(std::int64_t run_id, const EngineStatistics& statistics) {
   sqlite::write_transaction(*db_, [&] {
+    require_run(run_id);
     sqlite::Statement upsert(*db_, "INSERT OR REPLACE INTO run_statistics (run_id, name, value) VALUES (?, ?, ?)");
     for (const auto& [name, value] : statistics) upsert.bind(1, run_id).bind(2, name).bind(3, value).run();
   });
@@ -391,6 +404,7 @@ void RunStore::save_statistics(std::int64_t run_id, const EngineStatistics& stat
 
 void RunStore::save_calibration(std::int64_t run_id, const RestitutionTable& table) {
   sqlite::write_transaction(*db_, [&] {
+    require_run(run_id);
     sqlite::Statement insert(
         *db_, "INSERT INTO calibrations (run_id, contact, impact_speed_m_s, en, beta0) VALUES (?, ?, ?, ?, ?)");
     for (const auto& [contact, curve] :
@@ -492,6 +506,7 @@ std::int64_t RunStore::save_comparison(const ComparisonRecord& c) {
 
 void RunStore::save_snapshots(std::int64_t run_id, const SnapshotRecord& s) {
   sqlite::write_transaction(*db_, [&] {
+    require_run(run_id);
     sqlite::Statement upsert(*db_,
                              "INSERT OR REPLACE INTO run_snapshots (run_id, folder, collection, interval_s, frames) "
                              "VALUES (?, ?, ?, ?, ?)");

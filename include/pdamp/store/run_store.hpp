@@ -283,6 +283,10 @@ class RunStore {
   friend void copy_end_states(RunStore& store, std::int64_t study_id, const std::vector<int>& points, RunStore& target);
   sqlite::Database& database() { return *db_; }
   void migrate();
+  /// Within a transaction writing a run's rows: throws RuntimeFailure if the run is no
+  /// longer in the store (another process's `pdamp delete --force` took it while it ran),
+  /// where its rows would fail on their foreign key, or its end be stored nowhere.
+  void require_run(std::int64_t run_id);
   /// Replaces the run's checkpoint (within a transaction).
   void replace_checkpoint(std::int64_t run_id, const RunCheckpoint& checkpoint);
   std::unique_ptr<sqlite::Database> db_;

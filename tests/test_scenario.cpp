@@ -33,7 +33,7 @@ bool contains(const std::string& haystack, const std::string& needle) {
 }
 
 /// Every key and its default as `pdamp keys` prints them ("  section.key = default [unit]";
-/// "= other.key" for a default that is another key's value, "(none)" for none).
+/// "as other.key" for a default that is another key's value, "(none)" for none).
 std::vector<std::pair<std::string, std::string>> documented_defaults() {
   std::ostringstream listing;
   describe_scenario_keys(listing);
@@ -103,7 +103,7 @@ TEST_CASE("every key's documented default is what a scenario without keys resolv
   for (const auto& [name, text] : documented) {
     const std::string& key = name;  // by name: clang before 16 cannot capture a structured binding
     CAPTURE(key);
-    const std::string value = text.starts_with("= ") ? documented_value.at(text.substr(2)) : text;
+    const std::string value = text.starts_with("as ") ? documented_value.at(text.substr(3)) : text;
     documented_value[key] = value;
     REQUIRE(resolved.contains(key));
     CHECK(resolved.at(key) == value);

@@ -234,9 +234,6 @@ TEST_CASE("a bed at rest has m_app = m_p within 1 % and c_eq about 0, the empty 
   CHECK(rows(read_text(dir / "p_file.csv")).size() > 200);
 }
 
-// The container's work per cycle against the bed is π c_eq ω A² (only the force's first
-// harmonic works against a sinusoidal velocity), and at a steady state the bed dissipates
-// it: η from the ledger equals c_eq / (m_p ω) from the force, two independent routes.
 TEST_CASE("a weightless [characterise] point has no Gamma: NULL in the store, '-' in study show") {
   test::TempDir dir("characterise-weightless");
   const auto db = dir / "runs.sqlite";
@@ -257,6 +254,9 @@ TEST_CASE("a weightless [characterise] point has no Gamma: NULL in the store, '-
   CHECK(shown_column(r.out, "Gamma") == std::vector<std::string>(4, "-"));
 }
 
+// The container's work per cycle against the bed is π c_eq ω A² (only the force's first
+// harmonic works against a sinusoidal velocity), and at a steady state the bed dissipates
+// it: η from the ledger equals c_eq / (m_p ω) from the force, two independent routes.
 TEST_CASE("a shaken bed: the ledger's loss per cycle is the first harmonic's, the bed leaves the floor") {
   test::TempDir dir("characterise-shaken");
   const auto db = dir / "runs.sqlite";

@@ -66,10 +66,11 @@ po::options_description scenario_options() {
   return o;
 }
 
-/// --duration S: --set run.duration_s=S, in its place among the --set options.
+/// --duration S: --set run.duration_s=S, in its place among the --set options. One value:
+/// Boost refuses the option given twice, as every single-valued one.
 po::options_description duration_option() {
   po::options_description o("run");
-  o.add_options()("duration", po::value<std::vector<std::string>>()->composing(),
+  o.add_options()("duration", po::value<std::string>(),
                   "simulated time in s (same as --set run.duration_s=S)");
   return o;
 }

@@ -70,9 +70,23 @@ po::options_description scenario_options() {
 /// Boost refuses the option given twice, as every single-valued one.
 po::options_description duration_option() {
   po::options_description o("run");
-  o.add_options()("duration", po::value<std::string>(),
-                  "simulated time in s (same as --set run.duration_s=S)");
+  o.add_options()("duration", po::value<std::string>(), "simulated time in s (same as --set run.duration_s=S)");
   return o;
+}
+
+/// --threads and --simd: how the engines compute, which leaves the results' bits as they are,
+/// so a resumed run may be given other values than its start.
+po::options_description execution_options() {
+  po::options_description o("execution (the same bits for any)");
+  o.add_options()("threads", po::value<std::string>(), "threads for the soft engine (default: one per core)")(
+      "simd", po::value<std::string>(),
+      "both engines' instruction set, sse2, avx2 or avx512 (default: the widest this CPU runs)");
+  return o;
+}
+
+void apply_execution_options(const po::variables_map& vm) {
+  if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
+  if (vm.count("simd")) set_instruction_set(vm["simd"].as<std::string>(), "--simd");
 }
 
 /// The scenario file with --set and --duration, in the order given (the last of a key wins).
@@ -94,16 +108,12 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   if (command == "run") {
     po::options_description options("pdamp run --scenario FILE --model soft|hard [options]");
     options.add(help).add(scenario_options()).add(duration_option()).add(db_option()).add(snapshot_options());
-    options.add(checkpoint_option());
+    options.add(checkpoint_option()).add(execution_options());
     options.add_options()("model", po::value<std::string>(), "soft (Hertz DEM) or hard (event-driven)")(
-        "threads", po::value<std::string>(),
-        "threads for the soft engine (default: one per core); results are the same bits for any number")(
-        "simd", po::value<std::string>(),
-        "both engines' instruction set, sse2, avx2 or avx512 (default: the widest this CPU runs); results are the "
-        "same bits on each")("diagnose-events",
-                             "hard model: count where the collisions come from (the time between a sphere's "
-                             "collisions against the soft law's contact time, the approach speeds) into the run's "
-                             "statistics, diagnosis_* (docs/hard-engine.md); the results are the same bits");
+        "diagnose-events",
+        "hard model: count where the collisions come from (the time between a sphere's collisions against the soft "
+        "law's contact time, the approach speeds) into the run's statistics, diagnosis_* (docs/hard-engine.md); the "
+        "results are the same bits");
     const CommandLine line = parse_options(args, options);
     const po::variables_map& vm = line.vm;
     if (vm.count("help")) {
@@ -112,16 +122,14 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
       return 0;
     }
     const ScenarioRequest request = scenario_request(line, command);
-    if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
-    if (vm.count("simd")) set_instruction_set(vm["simd"].as<std::string>(), "--simd");
+    apply_execution_options(vm);
     return run_command(request, required_option(vm, "model", command), vm["db"].as<std::string>(), snapshot_request(vm),
                        isatty(STDERR_FILENO) != 0, checkpoint_interval(vm), vm.count("diagnose-events") > 0);
   }
   if (command == "compare") {
     po::options_description options("pdamp compare --scenario FILE [options]");
     options.add(help).add(scenario_options()).add(duration_option()).add(db_option()).add(snapshot_options());
-    options.add(checkpoint_option());
-    options.add_options()("threads", po::value<std::string>(), "threads for the soft engine (default: one per core)");
+    options.add(checkpoint_option()).add(execution_options());
     const CommandLine line = parse_options(args, options);
     const po::variables_map& vm = line.vm;
     if (vm.count("help")) {
@@ -129,7 +137,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
       return 0;
     }
     const ScenarioRequest request = scenario_request(line, command);
-    if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
+    apply_execution_options(vm);
     return compare_command(request, vm["db"].as<std::string>(), snapshot_request(vm), isatty(STDERR_FILENO) != 0,
                            checkpoint_interval(vm));
   }
@@ -145,12 +153,11 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
   }
   if (command == "resume") {
     po::options_description options("pdamp resume RUN_ID [--until T] [--db FILE]");
-    options.add(help).add(db_option()).add(checkpoint_option());
+    options.add(help).add(db_option()).add(checkpoint_option()).add(execution_options());
     options.add_options()("RUN_ID", po::value<std::string>(), "run to continue")(
         "until", po::value<std::string>()->value_name("T"),
         "simulated time to run to (s), beyond the run's end: extends a completed run; the result is the same bits "
-        "as a run of that duration")("threads", po::value<std::string>(),
-                                     "threads for the soft engine (default: one per core); the same bits for any");
+        "as a run of that duration");
     po::positional_options_description positional;
     positional.add("RUN_ID", 1);
     po::options_description accepted;  // the snapshot options only to refuse them with the reason
@@ -171,7 +178,7 @@ int dispatch(const std::string& command, const std::vector<std::string>& args) {
     const std::optional<double> until =
         vm.count("until") ? std::optional(parse_seconds(vm["until"].as<std::string>(), 0.0, false, 1e9, "--until"))
                           : std::nullopt;
-    if (vm.count("threads")) set_thread_count(vm["threads"].as<std::string>());
+    apply_execution_options(vm);
     return resume_command(run_id, until, vm["db"].as<std::string>(), isatty(STDERR_FILENO) != 0,
                           checkpoint_interval(vm));
   }

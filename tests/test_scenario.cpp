@@ -176,6 +176,30 @@ TEST_CASE("bad values are rejected with the key, the value and what is valid") {
   }
 }
 
+// A '+' before the digits is how many people write a positive number; the signs that make
+// no number stay refused.
+TEST_CASE("a number may carry a '+' before its digits and its exponent, and nothing else around it") {
+  const Scenario s = scenario_from(
+      "[run]\nduration_s = +0.04\nsample_interval_s = +1e-3\nmax_steps = +2e+9\n"
+      "[host]\nz0_m = +.01\n[particles]\nseed = +7\ndiameter_m = +0.001 +0.0012\n"
+      "[gravity]\ng_m_s2 = +1 0 -9\n",
+      {"run.dt_s=+1e-6"});
+  CHECK(s.run.duration_s == 0.04);
+  CHECK(s.run.sample_interval_s == 1e-3);
+  CHECK(s.run.max_steps == 2'000'000'000);
+  CHECK(s.host.z0_m == 0.01);
+  CHECK(s.particles.seed == 7);
+  CHECK(s.particles.diameter_min_m == 0.001);
+  CHECK(s.gravity_m_s2.x() == 1.0);
+  CHECK(*s.run.dt_s == 1e-6);
+  for (const std::string bad : {"+", "++1", "+-1", "-+1", "0.04x", "+0.04x", "+ 1", "1e", "1e++3", "+inf", "+nan"}) {
+    CAPTURE(bad);
+    CHECK(contains(input_error("[run]\nduration_s = " + bad + "\n"), "run.duration_s = '" + bad + "'"));
+  }
+  CHECK(contains(input_error("[particles]\nseed = +-3\n"), "whole number"));
+  CHECK(contains(input_error("[run]\ndt_s = ++1e-6\n"), "'auto'"));
+}
+
 TEST_CASE("unknown, duplicated and malformed keys are rejected") {
   CHECK(contains(input_error("[host]\nmass = 1\n"), "unknown key 'host.mass'"));
   CHECK(contains(input_error("[host]\nmass_kg = 1\nmass_kg = 2\n"), "more than once"));

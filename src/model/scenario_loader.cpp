@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <ostream>
 #include <set>
 #include <span>
@@ -55,14 +57,29 @@ std::vector<std::string> split_words(const std::string& text) {
   return words;
 }
 
-double parse_number(const Value& v, const std::string& word) {
+/// `word` without a '+' before its digits, which from_chars does not take (it takes '-'
+/// there, and either sign before an exponent). "+", "++1" and "+-1" stay as they are, refused.
+std::string_view without_plus(std::string_view word) {
+  if (word.size() > 1 && word[0] == '+' && (std::isdigit(static_cast<unsigned char>(word[1])) || word[1] == '.')) {
+    word.remove_prefix(1);
+  }
+  return word;
+}
+
+/// `word` as a finite number, if it is one as people write it.
+std::optional<double> finite_number(std::string_view word) {
+  word = without_plus(word);
   double x = 0.0;
   const char* end = word.data() + word.size();
-  auto [ptr, ec] = std::from_chars(word.data(), end, x);
-  if (ec != std::errc() || ptr != end || !std::isfinite(x)) {
-    reject(v, "'" + printable(word) + "' is not a finite number (write e.g. 0.0157 or 1.5e-3)");
-  }
+  const auto [ptr, ec] = std::from_chars(word.data(), end, x);
+  if (ec != std::errc() || ptr != end || !std::isfinite(x)) return std::nullopt;
   return x;
+}
+
+double parse_number(const Value& v, const std::string& word) {
+  const std::optional<double> x = finite_number(word);
+  if (!x) reject(v, "'" + printable(word) + "' is not a finite number (write e.g. 0.0157, +2 or 1.5e-3)");
+  return *x;
 }
 
 /// A numeric range and the words that explain it.
@@ -305,8 +322,9 @@ const std::vector<KeySpec>& key_specs() {
          "random seed of the initial placement (unsigned 64-bit)",
          [](Scenario& s, const Value& v) {
            std::uint64_t seed = 0;
-           const char* end = v.text.data() + v.text.size();
-           auto [ptr, ec] = std::from_chars(v.text.data(), end, seed);
+           const std::string_view digits = without_plus(v.text);
+           const char* end = digits.data() + digits.size();
+           auto [ptr, ec] = std::from_chars(digits.data(), end, seed);
            if (ec != std::errc() || ptr != end) reject(v, "must be a whole number from 0 to 18446744073709551615");
            s.particles.seed = seed;
          },
@@ -320,15 +338,11 @@ const std::vector<KeySpec>& key_specs() {
          [](Scenario& s, const Value& v) {
            constexpr Range time_step{0.0, inf, false, "must be 'auto' or a time step > 0 in seconds"};
            const auto words = split_words(v.text);
-           double dt = 0.0;
            if (v.text == "auto") {
              s.run.dt_s.reset();
              return;
            }
-           if (words.size() != 1 || std::from_chars(words[0].data(), words[0].data() + words[0].size(), dt).ptr !=
-                                        words[0].data() + words[0].size()) {
-             reject(v, time_step.text);
-           }
+           if (words.size() != 1 || !finite_number(words[0])) reject(v, time_step.text);
            s.run.dt_s = parse_in_range(v, time_step);
          },
          ""},

@@ -277,6 +277,31 @@ TEST_CASE("'#' starts a comment after a space, and inside a value it is refused,
   CHECK(contains(input_error("", {"scenario.name=run #7"}), "a value cannot contain '#'"));
 }
 
+// The name is printed in tables and on terminals: a control character in it would break
+// the line or act as a command there.
+TEST_CASE("a scenario name with a control character is refused, naming the key") {
+  for (const std::string name : {"run\t7", "run\x1b[2J", "run\x7f",
+                                 "run\xc2\x9b"
+                                 "2J"}) {
+    CAPTURE(name);
+    const std::string message = input_error("[scenario]\nname = " + name + "\n");
+    CHECK(contains(message, "scenario.name = '"));
+    CHECK(contains(message, "control character at byte 3"));
+    CHECK(contains(input_error("", {"scenario.name=" + name}), "--set scenario.name"));
+  }
+  CHECK(scenario_from("[scenario]\nname = Kühlung ∆ 振動\n").name == "Kühlung ∆ 振動");  // UTF-8 stays
+  const std::string by_file = [] {
+    try {
+      parse_scenario("", "bad\x1bname", "bad\x1bname.ini");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  }();
+  CHECK(contains(by_file, "default (the file name): scenario.name = 'bad\\x1bname'"));
+  CHECK(contains(by_file, "or give scenario.name"));
+}
+
 TEST_CASE("a --set is one line: a line break in it is refused, not read as more keys") {
   const std::string message = input_error("", {"host.z0_m=0.01\nhost.mass_kg=1"});
   CHECK(contains(message, "without line breaks"));

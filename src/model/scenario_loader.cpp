@@ -546,6 +546,29 @@ void check_particles(const Scenario& s, const RawScenario& raw) {
   }
 }
 
+/// The byte where `text` holds a control character (C0, DEL, or C1 in UTF-8), if it does.
+std::optional<std::size_t> control_character_at(std::string_view text) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    const bool c1 = byte == 0xc2 && i + 1 < text.size() && static_cast<unsigned char>(text[i + 1]) >= 0x80 &&
+                    static_cast<unsigned char>(text[i + 1]) <= 0x9f;
+    if (byte < 0x20 || byte == 0x7f || c1) return i;
+  }
+  return std::nullopt;
+}
+
+/// The name is printed in tables and on terminals, where a control character breaks the
+/// line or acts as a command.
+void check_name(const Scenario& s, const RawScenario& raw) {
+  const auto at = control_character_at(s.name);
+  if (!at) return;
+  const bool given = raw.given.contains("scenario.name");
+  const Value v = given ? raw.given.at("scenario.name") : Value{"scenario.name", s.name, "default (the file name)"};
+  reject(v, "holds a control character at byte " + std::to_string(*at) +
+                "; a name is shown in tables and on terminals: write it in printable characters" +
+                (given ? "" : ", or give scenario.name"));
+}
+
 void check_run(const Scenario& s, const RawScenario& raw) {
   if (s.run.sample_interval_s > s.run.duration_s) {
     reject(value_of(raw, "run.sample_interval_s"), "must not exceed run.duration_s");
@@ -584,6 +607,7 @@ Scenario build(const RawScenario& raw, const std::string& default_name) {
     effective[spec.key] = v.text;
   }
   effective["scenario.name"] = s.name;
+  check_name(s, raw);
   check_excitation(s, raw);
   check_particles(s, raw);
   check_run(s, raw);

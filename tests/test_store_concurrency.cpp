@@ -155,3 +155,31 @@ TEST_CASE("eight processes settle and run full Table 1 into one new store: three
   CHECK(scalar(d, "SELECT count(*) FROM initial_states") == 1);
   CHECK(scalar(d, "SELECT count(DISTINCT initial_state_id) FROM runs") == 1);
 }
+
+// Processes sharing a fresh store settle the same bed at once and the first to store it
+// wins; the others must say they start from that stored bed, not that they stored it.
+TEST_CASE("a bed another process stored while this one settled it counts as reused, not as stored here") {
+  test::TempDir dir("concurrent-bed");
+  const auto db = dir / "runs.sqlite";
+  const Scenario s = load_scenario(test::small(), {"particles.count=10"});
+  RunStore mine(db), other(db);
+  bool stored_meanwhile = false;
+  const InitialBed bed = prepare_initial_bed(s, mine, nullptr, [&](double, double) {
+    if (stored_meanwhile) return;
+    other.save_initial_state(settle_key(s), place_particles(s.particles, s.cavity, HostModel(s).initial_state().z_m),
+                             0.0, 0.0, 0.0);
+    stored_meanwhile = true;
+  });
+  REQUIRE(stored_meanwhile);
+  CHECK(bed.reused);
+  CHECK(bed.state_id == std::optional<std::int64_t>(1));
+  sqlite::Database d(db);
+  CHECK(scalar(d, "SELECT count(*) FROM initial_states") == 1);
+
+  test::TempDir alone("concurrent-bed-alone");
+  RunStore only(alone / "runs.sqlite");
+  const InitialBed settled = prepare_initial_bed(s, only);
+  CHECK_FALSE(settled.reused);
+  CHECK(settled.state_id == std::optional<std::int64_t>(1));
+  CHECK(prepare_initial_bed(s, only).reused);
+}

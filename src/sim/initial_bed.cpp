@@ -39,8 +39,11 @@ InitialBed prepare_initial_bed(const Scenario& scenario, RunStore& store, const 
   const soft::SettledBed bed =
       soft::settle_bed(scenario, place_particles(scenario.particles, scenario.cavity, host_z), stop, progress);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  const std::int64_t id = store.save_initial_state(key, bed.particles, bed.settle_time_s, bed.kinetic_J, wall_s);
-  return {bed.particles, id, false, bed.settle_time_s};
+  const SavedInitialState saved =
+      store.save_initial_state(key, bed.particles, bed.settle_time_s, bed.kinetic_J, wall_s);
+  // Another process that settled the same bed meanwhile stored it first: the same bits,
+  // which this run reuses as if it had found them.
+  return {bed.particles, saved.state_id, !saved.stored, bed.settle_time_s};
 }
 
 Particles moved_with_host(Particles spheres, const HostState& shift) {

@@ -317,12 +317,12 @@ std::optional<StoredInitialState> RunStore::find_initial_state(const std::string
   return StoredInitialState{id, load_initial_particles(id), query.column_double(1)};
 }
 
-std::int64_t insert_initial_state(sqlite::Database& db, const std::string& settle_key, const Particles& p,
-                                  double settle_time_s, double kinetic_J, double wall_time_s) {
+SavedInitialState insert_initial_state(sqlite::Database& db, const std::string& settle_key, const Particles& p,
+                                       double settle_time_s, double kinetic_J, double wall_time_s) {
   // Another process may have settled the same bed meanwhile: the first one stays.
   sqlite::Statement existing(db, "SELECT state_id FROM initial_states WHERE settle_key = ?");
   existing.bind(1, settle_key);
-  if (existing.step()) return existing.column_int(0);
+  if (existing.step()) return {existing.column_int(0), false};
   sqlite::Statement state(db,
                           "INSERT INTO initial_states (settle_key, n_particles, settle_time_s, kinetic_J, "
                           "wall_time_s, created_at) VALUES (?, ?, ?, ?, ?, ?)");
@@ -345,11 +345,11 @@ std::int64_t insert_initial_state(sqlite::Database& db, const std::string& settl
     particle.bind(12, p.radius_m[i]).bind(13, p.mass_kg[i]);
     particle.run();
   }
-  return id;
+  return {id, true};
 }
 
-std::int64_t RunStore::save_initial_state(const std::string& settle_key, const Particles& p, double settle_time_s,
-                                          double kinetic_J, double wall_time_s) {
+SavedInitialState RunStore::save_initial_state(const std::string& settle_key, const Particles& p, double settle_time_s,
+                                               double kinetic_J, double wall_time_s) {
   return sqlite::write_transaction(
       *db_, [&] { return insert_initial_state(*db_, settle_key, p, settle_time_s, kinetic_J, wall_time_s); });
 }

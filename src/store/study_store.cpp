@@ -356,7 +356,8 @@ void StudyStore::complete_point(std::int64_t study_id, int point, int attempt, c
 std::int64_t StudyStore::store_end_and_complete(std::int64_t study_id, int point, int attempt, const std::string& label,
                                                 const FrfEndState& end, const Particles& end_spheres, double kinetic_J,
                                                 double wall_time_s) {
-  const std::int64_t state_id = insert_initial_state(db(), label, end_spheres, end.t_s, kinetic_J, wall_time_s);
+  const std::int64_t state_id =
+      insert_initial_state(db(), label, end_spheres, end.t_s, kinetic_J, wall_time_s).state_id;
   sqlite::Statement state(db(),
                           "INSERT INTO study_point_states (study_id, point, run_id, state_id, t_s, host_z_m, "
                           "host_v_m_s) VALUES (?, ?, ?, ?, ?, ?, ?)");

@@ -19,7 +19,7 @@ namespace pdamp {
 struct InitialBed {
   Particles particles;
   std::optional<std::int64_t> state_id;  ///< in the store; empty for a bed without particles
-  bool reused = false;                   ///< taken from the store rather than settled now
+  bool reused = false;                   ///< taken from the store rather than stored now (also if settled here too)
   double settle_time_s = 0.0;
   /// `particles` are state_id's moved rigidly by this (moved_with_host), which the run
   /// records instead of storing them again.

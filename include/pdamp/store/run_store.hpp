@@ -59,6 +59,13 @@ struct StoredInitialState {
   double settle_time_s = 0.0;
 };
 
+/// A bed saved under its settle key: its id, and whether this save stored it (false: another
+/// process had stored the same bed first, and it stays).
+struct SavedInitialState {
+  std::int64_t state_id = 0;
+  bool stored = false;
+};
+
 struct RunEnd {
   RunStatus status = RunStatus::completed;
   std::string message;
@@ -194,8 +201,8 @@ struct StoreOptions {
 /// while others hold the lock (StoreOptions::busy_limit).
 /// save_initial_state's rows written inside the caller's write transaction on `db`, so
 /// that a bed can be stored together with what refers to it.
-std::int64_t insert_initial_state(sqlite::Database& db, const std::string& settle_key, const Particles& particles,
-                                  double settle_time_s, double kinetic_J, double wall_time_s);
+SavedInitialState insert_initial_state(sqlite::Database& db, const std::string& settle_key, const Particles& particles,
+                                       double settle_time_s, double kinetic_J, double wall_time_s);
 
 class RunStore {
  public:
@@ -225,9 +232,9 @@ class RunStore {
   /// The bed stored under `settle_key`, if any.
   std::optional<StoredInitialState> find_initial_state(const std::string& settle_key);
   /// Stores a bed under `settle_key` (or keeps the one another process stored under it
-  /// meanwhile) in a transaction of its own; returns its state_id.
-  std::int64_t save_initial_state(const std::string& settle_key, const Particles& particles, double settle_time_s,
-                                  double kinetic_J, double wall_time_s);
+  /// meanwhile) in a transaction of its own.
+  SavedInitialState save_initial_state(const std::string& settle_key, const Particles& particles, double settle_time_s,
+                                       double kinetic_J, double wall_time_s);
   Particles load_initial_particles(std::int64_t state_id);
 
   /// Stores a comparison, and ends its runs' comparison_runs row in the same transaction.

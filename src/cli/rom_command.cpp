@@ -83,24 +83,49 @@ rom::DamperTable characterisation_table(const po::variables_map& vm) {
     models.insert(std::string(to_string(p.characterise->model)));
     names.insert(p.section);
   }
-  auto chosen = [&](const char* option, const std::set<std::string>& present, const std::string& what) {
-    std::string list;
-    for (const auto& v : present) list += (list.empty() ? "" : ", ") + v;
-    if (vm.count(option)) {
-      std::string value = vm[option].as<std::string>();
-      if (!present.contains(value)) {
-        throw InputError(where + ": --" + option + " " + value + ": the study's " + what + " are " + list);
-      }
-      return value;
+  auto list = [](const std::set<std::string>& values) {
+    std::string text;
+    for (const auto& v : values) text += (text.empty() ? "" : ", ") + v;
+    return text;
+  };
+  auto given = [&](const char* option, const std::set<std::string>& present,
+                   const std::string& what) -> std::optional<std::string> {
+    if (!vm.count(option)) return std::nullopt;
+    const std::string value = vm[option].as<std::string>();
+    if (!present.contains(value)) {
+      throw InputError(where + ": --" + option + " " + value + ": the study's " + what + " are " + list(present));
     }
-    if (present.size() > 1) {
-      throw InputError(where + " has " + what + " " + list + ": choose one with --" + option +
+    return value;
+  };
+  const std::optional<std::string> model_given = given("model", models, "models");
+  const std::optional<std::string> section_given = given("section", names, "sections");
+  // Each section runs its own models: those of the section chosen, the sections of the model.
+  auto with = [&](const std::optional<std::string>& model, const std::optional<std::string>& section,
+                  bool of_sections) {
+    std::set<std::string> values;
+    for (const auto& p : open.study.points) {
+      const std::string m(to_string(p.characterise->model));
+      if ((!model || m == *model) && (!section || p.section == *section)) values.insert(of_sections ? p.section : m);
+    }
+    return values;
+  };
+  if (model_given && section_given && with(model_given, section_given, true).empty()) {
+    throw InputError(where + ": --section " + *section_given + " and --model " + *model_given + ": [" + *section_given +
+                     "] ran no " + *model_given + " points, only " + list(with(std::nullopt, section_given, false)) +
+                     " (the sections with " + *model_given + " points are " +
+                     list(with(model_given, std::nullopt, true)) + ")");
+  }
+  auto only = [&](const char* option, const std::set<std::string>& choices, const std::string& what) {
+    if (choices.size() > 1) {
+      throw InputError(where + " has " + what + " " + list(choices) + ": choose one with --" + option +
                        (std::string(option) == "section" ? " (each section characterises its own bed)" : ""));
     }
-    return *present.begin();
+    return *choices.begin();
   };
-  const std::string model = chosen("model", models, "models");
-  const std::string section = chosen("section", names, "sections");
+  const std::string model =
+      model_given ? *model_given : only("model", with(std::nullopt, section_given, false), "models");
+  const std::string section =
+      section_given ? *section_given : only("section", with(model, std::nullopt, true), "sections");
   const auto& definition =
       *std::find_if(sections.begin(), sections.end(), [&](const auto& c) { return c.section == section; });
   const bool gammas = definition.axis == study::AmplitudeAxis::gamma;

@@ -641,6 +641,11 @@ TEST_CASE("rom: bad hosts, excitations and frequency ranges are refused with the
     }
   };
   range_refuses("10:30", "expected three fields");
+  // An empty field, a trailing colon included, is no value taken as missing.
+  range_refuses("15:20:5:", "--freq '15:20:5:': expected three fields separated by ':', not 4 (write START:STOP:COUNT");
+  range_refuses(":15:20:5", "not 4");
+  range_refuses("15:20:", "'' is not a whole number of frequencies");
+  range_refuses("15::5", "'' is not a number of Hz");
   range_refuses("10:x:5", "'x' is not a number of Hz");
   range_refuses("10:30:5.5", "'5.5' is not a whole number");
   range_refuses("30:10:5", "needs 0 < start < stop");

@@ -227,6 +227,8 @@ TEST_CASE("pdamp rom: bad input exits 2 with the reason and writes nothing") {
        "outside the table's frequencies, 10 to 28 Hz"},
       {table(liftoff()) + host + Args{"--force", "0.05", "--freq", "14:22:1"}, "frequency count 1"},
       {table(liftoff()) + host + Args{"--force", "0.05", "--freq", "14:22"}, "--freq"},
+      {table(liftoff()) + host + Args{"--force", "0.05", "--freq", "14:22:50:"},
+       "--freq '14:22:50:': expected three fields separated by ':', not 4 (write START:STOP:COUNT"},
       {table(liftoff()) + host + Args{"--force", "-0.05", "--freq", "14:22:50"}, "force amplitude F0 (N) = -0.05"},
       {table(liftoff()) + host + Args{"--freq", "14:22:50"}, "exactly one of --force"},
       {good + Args{"--base", "1e-4"}, "exactly one of --force"},

@@ -124,10 +124,15 @@ FrequencyRange parse_frequency_range(const std::string& text_in, Spacing spacing
   const auto bad = [&](const std::string& why) {
     return InputError(option + " '" + text_in + "': " + why + " (write START:STOP:COUNT, e.g. 10:30:200)");
   };
+  // Every field, empty ones too: "15:20:5:" has four (getline would drop the last).
   std::vector<std::string> parts;
-  std::istringstream in(text_in);
-  for (std::string part; std::getline(in, part, ':');) parts.push_back(part);
-  if (parts.size() != 3) throw bad("expected three fields separated by ':'");
+  for (std::size_t start = 0;;) {
+    const std::size_t colon = text_in.find(':', start);
+    parts.push_back(text_in.substr(start, colon - start));
+    if (colon == std::string::npos) break;
+    start = colon + 1;
+  }
+  if (parts.size() != 3) throw bad("expected three fields separated by ':', not " + std::to_string(parts.size()));
   FrequencyRange range;
   range.spacing = spacing;
   double* bounds[] = {&range.start_hz, &range.stop_hz};

@@ -107,6 +107,8 @@ TEST_CASE("study progress: points done, the points running with their phase, the
   StudyProgress progress(out, false, "fill", 10, 2, 2, time.clock());
   progress.started(3);
   progress.started(4);
+  progress.progressed(3, 0.0, "settling");
+  progress.progressed(4, 0.0, "settling");
   progress.update(6);
   CHECK(out.str().empty());  // a log line every 30 s
   time.advance(30.0);
@@ -128,6 +130,30 @@ TEST_CASE("study progress: points done, the points running with their phase, the
   progress.message("pdamp: point 5: warning: w");
   progress.finish();
   CHECK(out.str() == "pdamp: point 5: warning: w\n");
+}
+
+// study resume: a point resumed from its checkpoint reports its first progress there; the
+// work before was another process's, and counting it here made the time left too short.
+TEST_CASE("study progress: the time left counts only the work done in this process") {
+  FakeClock time;
+  std::ostringstream out;
+  StudyProgress progress(out, false, "fill", 4, 1, 1, time.clock());
+  progress.started(2);
+  time.advance(1.0);
+  progress.progressed(2, 0.6, "hard");  // resumed at 60 %
+  time.advance(29.0);
+  progress.progressed(2, 0.8, "hard");
+  progress.update(2);
+  // 0.2 of a point in 29 s: 145 s a point; 2 queued + 0.2 left.
+  CHECK(out.str() == "pdamp: study fill: 1/4 done; running 2 (hard 80 %); 5 min 19 s left\n");
+  time.advance(29.0);
+  progress.ended(2, true);
+  progress.started(3);
+  out.str("");
+  time.advance(30.0);
+  progress.update(1);
+  // Point 2 did 0.4 of a point here in 58 s: 145 s a point, for 1 queued + 1 running.
+  CHECK(out.str() == "pdamp: study fill: 2/4 done; running 3 (starting); 4 min 50 s left\n");
 }
 
 TEST_CASE("study progress on a terminal: the line redrawn in place, ended by a new line") {

@@ -6,8 +6,8 @@
 namespace pdamp {
 namespace {
 
-/// A running point counts towards the time estimate once it has done this much: before,
-/// its start-up dominates.
+/// Points count towards the time estimate once they have done this much work here: before,
+/// start-up dominates.
 constexpr double estimate_after_fraction = 0.02;
 
 }  // namespace
@@ -28,14 +28,16 @@ void StudyProgress::progressed(int point, double fraction, std::string_view phas
   if (it == running_.end()) return;
   it->second.fraction = std::clamp(fraction, 0.0, 1.0);
   it->second.phase = phase;
+  if (!it->second.origin) it->second.origin.emplace(clock_(), it->second.fraction);
 }
 
 void StudyProgress::ended(int point, bool completed) {
   const auto it = running_.find(point);
   if (it == running_.end()) return;
   if (completed) {
-    completed_wall_s_ += std::chrono::duration<double>(clock_() - it->second.started).count();
-    ++completed_here_;
+    const auto [since, from] = it->second.origin.value_or(std::pair(it->second.started, 0.0));
+    completed_wall_s_ += std::chrono::duration<double>(clock_() - since).count();
+    completed_work_ += 1.0 - from;
     ++done_;
   } else {
     ++not_completed_;
@@ -45,14 +47,14 @@ void StudyProgress::ended(int point, bool completed) {
 
 std::string StudyProgress::time_left(int queued) const {
   double mean_s = 0.0;
-  if (completed_here_ > 0) {
-    mean_s = completed_wall_s_ / completed_here_;
+  if (completed_work_ >= estimate_after_fraction) {
+    mean_s = completed_wall_s_ / completed_work_;
   } else {
-    // No point has finished yet: extrapolate the running ones that have made headway.
+    // No point has finished here yet: extrapolate the running ones that have made headway.
     int estimates = 0;
     for (const auto& [point, r] : running_) {
-      if (r.fraction < estimate_after_fraction) continue;
-      mean_s += std::chrono::duration<double>(clock_() - r.started).count() / r.fraction;
+      if (!r.origin || r.fraction - r.origin->second < estimate_after_fraction) continue;
+      mean_s += std::chrono::duration<double>(clock_() - r.origin->first).count() / (r.fraction - r.origin->second);
       ++estimates;
     }
     if (estimates == 0) return "";

@@ -4,9 +4,11 @@
 
 #include <chrono>
 #include <map>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <utility>
 
 #include "progress.hpp"
 
@@ -31,7 +33,7 @@ class StudyProgress {
   void finish();
 
   /// "3 min 05 s left", or "" until known: the points still to run (running ones by what is
-  /// left of them) at the mean wall time per point, `jobs` at a time.
+  /// left of them) at the mean wall time per point computed here, `jobs` at a time.
   std::string time_left(int queued) const;
 
  private:
@@ -39,6 +41,9 @@ class StudyProgress {
     std::chrono::steady_clock::time_point started;
     double fraction = 0.0;
     std::string phase = "starting";
+    /// The point's first progress, from which its pace is measured: a point resumed from
+    /// its checkpoint starts there, and what came before was computed by another process.
+    std::optional<std::pair<std::chrono::steady_clock::time_point, double>> origin{};
   };
   std::string line(int queued) const;
 
@@ -47,8 +52,9 @@ class StudyProgress {
   std::string study_;
   int total_, done_, not_completed_ = 0, jobs_;
   std::map<int, Running> running_;
+  /// The wall time and the work (in points) of the points completed here, from their origin.
   double completed_wall_s_ = 0.0;
-  int completed_here_ = 0;
+  double completed_work_ = 0.0;
 };
 
 }  // namespace pdamp

@@ -347,6 +347,43 @@ TEST_CASE("spheres whose mass or inertia double precision cannot hold are refuse
   CHECK(contains(input_error("[particles]\ndiameter_m = 1e-300 1e-299\n"), "particles.density_kg_m3"));
 }
 
+// A host started absurdly far from rest or absurdly fast, or driven so, once reached the
+// engines as NaN time steps blamed on run.max_steps, or as a bed settling at a crawl.
+TEST_CASE("the host's initial state and its excitation keep it within 100 cavity heights of rest") {
+  // Table 1: H = 7.04 mm, so 0.704 m; w0 = sqrt(470 / 0.0376) = 111.8 rad/s.
+  const std::string table1 = "[cavity]\nheight_m = 0.00704\n";
+  CHECK(scenario_from(table1 + "[host]\nz0_m = -0.7\n").host.z0_m == -0.7);
+  CHECK(scenario_from(table1 + "[host]\nz0_m = 0\nv0_m_s = 78\n").host.v0_m_s == 78);  // 0.698 m amplitude
+  for (const char* z0 : {"1e300", "1e10", "-0.71"}) {
+    CAPTURE(z0);
+    const std::string message = input_error(table1 + "[host]\nz0_m = " + z0 + "\n");
+    CHECK(contains(message, "host.z0_m = '" + std::string(z0) + "': must be within +-100 cavity heights (0.704 m)"));
+  }
+  for (const char* v0 : {"1e300", "-80"}) {
+    CAPTURE(v0);
+    const std::string message = input_error(table1 + "[host]\nz0_m = 0\nv0_m_s = " + v0 + "\n");
+    CHECK(contains(message, "host.v0_m_s = '" + std::string(v0) + "': the host would move up to"));
+    CHECK(contains(message, "|v0| must be at most 78.7"));
+  }
+  // A host on a negligible spring travels no farther than its speed takes it in the run.
+  CHECK(scenario_from("[host]\nstiffness_N_m = 1e-20\nz0_m = 0\nv0_m_s = 0.05\n").host.v0_m_s == 0.05);
+  CHECK(contains(input_error("[host]\nstiffness_N_m = 1e-20\nz0_m = 0\nv0_m_s = 1\n[run]\nduration_s = 1\n"),
+                 "|v0| must be at most 0.704 m/s"));
+  // The excitation likewise: a base's or prescribed motion's amplitude, a force's steady response.
+  const std::string base = "[excitation]\nmode = base\nfrequency_hz = 20\n[host]\nz0_m = 0\n" + table1;
+  CHECK(scenario_from(base + "[excitation]\namplitude_m = 0.7\n").excitation.amplitude_m == 0.7);
+  CHECK(contains(input_error(base + "[excitation]\namplitude_m = 1e300\n"),
+                 "excitation.amplitude_m = '1e300': must be at most 100 cavity heights (0.704 m)"));
+  // At 20 Hz: |470 - 0.0376 (2 pi 20)^2 + i 0.1 (2 pi 20)| = 124.39 N/m, so at most 87.57 N.
+  const std::string force = "[excitation]\nmode = force\nfrequency_hz = 20\n[host]\nz0_m = 0\n" + table1;
+  CHECK(scenario_from(force + "[excitation]\nforce_N = 87\n").excitation.force_N == 87);
+  CHECK(contains(input_error(force + "[excitation]\nforce_N = 88\n"),
+                 "excitation.force_N = '88': would drive the host to a steady amplitude of 0.707"));
+  CHECK(contains(input_error(force + "[excitation]\nforce_N = 1e300\n"), "at most 87.57"));
+  // Prescribed motion uses neither key (and refuses them if given).
+  CHECK(scenario_from("[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 50\n").host.z0_m == 0.0157);
+}
+
 TEST_CASE("a cavity far larger than its spheres is refused at once, naming the cell grid it would need") {
   const auto start = std::chrono::steady_clock::now();
   const std::string message = input_error("[cavity]\ndiameter_m = 1e6\nheight_m = 1e6\n");

@@ -546,6 +546,54 @@ void check_particles(const Scenario& s, const RawScenario& raw) {
   }
 }
 
+/// How far the host's initial state may take it from its rest, in cavity heights: a damper's
+/// host moves by about its cavity's size. Far beyond, the spheres' coordinates (absolute,
+/// with the host's) lose the precision their contacts need and the time step for the
+/// impacts such a host gives shrinks to nothing; host.z0_m = 1e300 makes no number at all.
+constexpr double max_host_reach_in_heights = 100.0;
+
+/// The host's motion within max_host_reach_in_heights cavity heights of its rest position,
+/// judged by the host alone (M, K, C): for host.z0_m and host.v0_m_s, its free amplitude
+/// sqrt(z0² + (v0/ω0)²), ω0 = sqrt(K/M), or what it can travel in the run at its top speed,
+/// whichever is less (a host on a soft spring); for the excitation, the amplitude A of base or
+/// prescribed motion, or the steady amplitude F0 / |K - M ω² + i C ω| that a force gives.
+void check_host(const Scenario& s, const RawScenario& raw) {
+  const double limit_m = max_host_reach_in_heights * s.cavity.height_m;
+  std::ostringstream range;
+  range << max_host_reach_in_heights << " cavity heights (" << limit_m << " m)";
+  const auto& e = s.excitation;
+  const auto& h = s.host;
+  if (e.mode == ExcitationMode::force) {
+    const double w = e.angular_frequency_rad_s();
+    const double stiffness = std::hypot(h.stiffness_N_m - h.mass_kg * w * w, h.damping_N_s_m * w);
+    if (!(e.force_N / stiffness <= limit_m)) {
+      std::ostringstream why;
+      why << "would drive the host to a steady amplitude of " << e.force_N / stiffness
+          << " m (F0 / |K - M w^2 + i C w|), more than " << range.str() << "; at most " << limit_m * stiffness << " N";
+      reject(value_of(raw, "excitation.force_N"), why.str());
+    }
+  } else if (e.mode != ExcitationMode::free_decay && !(e.amplitude_m <= limit_m)) {
+    reject(value_of(raw, "excitation.amplitude_m"), "must be at most " + range.str());
+  }
+  if (e.mode == ExcitationMode::prescribed_motion) return;  // z0 and v0 are not used
+  const double z0 = std::abs(h.z0_m), v0 = std::abs(h.v0_m_s), t = s.run.duration_s;
+  const double w0 = std::sqrt(h.stiffness_N_m / h.mass_kg);
+  if (!(z0 <= limit_m)) reject(value_of(raw, "host.z0_m"), "must be within +-" + range.str() + " of the rest position");
+  const double amplitude_m = v0 == 0.0 ? z0 : std::hypot(z0, v0 / w0);
+  const double travel_m = z0 + t * std::hypot(v0, w0 * z0);
+  const double reach_m = std::isnan(travel_m) ? amplitude_m : std::min(amplitude_m, travel_m);
+  if (reach_m <= limit_m) return;
+  // The largest |v0| whose reach is within the limit, by either bound.
+  const double by_amplitude = w0 * std::sqrt(limit_m * limit_m - z0 * z0);
+  const double top_speed = (limit_m - z0) / t;
+  const double by_travel = std::sqrt(std::max(0.0, top_speed * top_speed - w0 * w0 * z0 * z0));
+  std::ostringstream why;
+  why << "the host would move up to " << reach_m << " m from its rest position (its free amplitude sqrt(z0^2 + "
+      << "(v0/w0)^2), or in run.duration_s at its top speed), more than " << range.str()
+      << "; with host.z0_m = " << h.z0_m << " m, |v0| must be at most " << std::max(by_amplitude, by_travel) << " m/s";
+  reject(value_of(raw, "host.v0_m_s"), why.str());
+}
+
 /// The byte where `text` holds a control character (C0, DEL, or C1 in UTF-8), if it does.
 std::optional<std::size_t> control_character_at(std::string_view text) {
   for (std::size_t i = 0; i < text.size(); ++i) {
@@ -609,6 +657,7 @@ Scenario build(const RawScenario& raw, const std::string& default_name) {
   effective["scenario.name"] = s.name;
   check_name(s, raw);
   check_excitation(s, raw);
+  check_host(s, raw);
   check_particles(s, raw);
   check_run(s, raw);
   s.canonical_text = canonical_text(effective);

@@ -648,6 +648,29 @@ TEST_CASE("a damaged store is refused by every command, with a message and no SQ
   CHECK(file_bytes(db) == before);
 }
 
+// A schema changed by hand (a view dropped) passes SQLite's checks: a run into such a store
+// computed, then failed with exit 1 when it came to store or print its results.
+TEST_CASE("a store lacking one of pdamp's views or tables is refused by every command before any work") {
+  test::TempDir dir("cli-schema");
+  const auto db = dir / "runs.sqlite";
+  store_host_run(dir, db);
+  {
+    sqlite::Database d(db);
+    d.exec("CREATE VIEW my_runs AS SELECT run_id FROM runs");  // a user's own: no harm
+    REQUIRE(pdamp_cli({"runs", "--db", db.string()}, dir).code == 0);
+    d.exec("DROP VIEW run_summary");
+  }
+  const std::string before = file_bytes(db);
+  for (const auto& args : store_commands(db)) {
+    CAPTURE(args[0]);
+    const Result r = pdamp_cli(args, dir);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("runs.sqlite' is damaged: its schema lacks view run_summary, which pdamp created") !=
+          std::string::npos);
+  }
+  CHECK(file_bytes(db) == before);
+}
+
 TEST_CASE("progress on a terminal: percent and time left on one line") {
   test::TempDir dir("cli-terminal");
   const std::string text =

@@ -213,6 +213,7 @@ RunStore::RunStore(const std::filesystem::path& file, StoreAccess access, const 
     sqlite::retry_while_busy(*db_, [this] { db_->exec("PRAGMA journal_mode = WAL"); });
     db_->exec("PRAGMA synchronous = NORMAL");  // WAL + NORMAL: a killed process loses nothing committed
     migrate();
+    store_file::check_schema(*db_);  // also one another process created or migrated since examined
   } catch (const sqlite::NotWritable& e) {
     if (examined.kind == Kind::store && examined.version < latest) {
       throw InputError("database '" + file.string() + "' has schema version " + std::to_string(examined.version) +

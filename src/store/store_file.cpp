@@ -3,8 +3,12 @@
 #include <algorithm>
 #include <array>
 #include <fstream>
+#include <set>
 #include <string_view>
+#include <utility>
 #include <vector>
+
+#include "schema.hpp"
 
 namespace pdamp::store_file {
 namespace {
@@ -96,7 +100,32 @@ std::string not_a_store(const std::filesystem::path& file, std::int64_t applicat
   return message + "); give another --db";
 }
 
+/// The (type, name) of every schema object but SQLite's own.
+std::set<std::pair<std::string, std::string>> schema_objects(sqlite::Database& db) {
+  sqlite::Statement query(db, "SELECT type, name FROM sqlite_schema WHERE substr(name, 1, 7) != 'sqlite_'");
+  std::set<std::pair<std::string, std::string>> objects;
+  while (query.step()) objects.emplace(query.column_text(0), query.column_text(1));
+  return objects;
+}
+
 }  // namespace
+
+void check_schema(sqlite::Database& db) {
+  static const auto expected = [] {
+    sqlite::Database scratch(":memory:");
+    for (const std::string_view migration : schema::migrations()) scratch.exec(migration);
+    return schema_objects(scratch);
+  }();
+  const auto present = schema_objects(db);
+  std::string missing;
+  for (const auto& [type, name] : expected) {
+    if (!present.contains({type, name})) missing += (missing.empty() ? "" : ", ") + type + " " + name;
+  }
+  if (missing.empty()) return;
+  throw InputError("the store " + named(db.file()) + " is damaged: its schema lacks " + missing +
+                   ", which pdamp created (the file was changed by hand or by another program); pdamp neither reads "
+                   "nor writes it. Restore the file from a copy, or give another --db");
+}
 
 void refuse_newer(const std::filesystem::path& file, int version, int latest_version) {
   throw InputError("database " + named(file) + " has schema version " + std::to_string(version) +
@@ -142,6 +171,7 @@ Examined examine(const std::filesystem::path& file, const StoreOptions& options,
     if (!pdamp_store) throw InputError(not_a_store(file, application_id, tables));
     if (examined.version > latest_version) refuse_newer(file, examined.version, latest_version);
     check_integrity(db, file, options, tables);
+    if (examined.version == latest_version) check_schema(db);
   } catch (const sqlite::Damaged& e) {
     throw InputError(e.what());
   }

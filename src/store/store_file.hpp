@@ -29,6 +29,12 @@ struct Examined {
 /// damaged store.
 Examined examine(const std::filesystem::path& file, const StoreOptions& options, int latest_version);
 
+/// Throws InputError for a store of the current schema version that lacks a table, view,
+/// index or trigger the migrations create (one changed by hand or by another program):
+/// found at open, before any work whose results could then not be stored. Objects added
+/// beside pdamp's (a user's own views) are left alone.
+void check_schema(sqlite::Database& db);
+
 /// Throws the InputError for a store of a newer schema than this pdamp's.
 [[noreturn]] void refuse_newer(const std::filesystem::path& file, int version, int latest_version);
 

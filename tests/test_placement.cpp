@@ -63,6 +63,43 @@ TEST_CASE("placement: too many spheres is an input error that says how many fit"
   CHECK(place_particles({0, 0.0012, 0.0012, 3840, 1}, cavity, 0.0).size() == 0);
 }
 
+// A range of diameters was counted as if every sphere had the largest: 100 spheres of 1 to
+// 2 mm, 17 % of this cavity's volume, were refused. Beyond the lattice for the largest they
+// are stacked by their own sizes; what does not fit so is refused, naming how many do.
+TEST_CASE("placement: a range of diameters beyond the lattice for the largest is stacked by size") {
+  const CavitySettings cavity{0.012, 0.010};
+  const ParticleSettings settings{100, 0.001, 0.002, 7800, 3};
+  REQUIRE(max_particles_that_fit(cavity, 0.002) < 100);
+  CHECK(particles_that_fit(settings, cavity) == 100);
+  const Particles p = place_particles(settings, cavity, 0.0157);
+  REQUIRE(p.size() == 100);
+  check_valid(p, cavity, 0.0157);
+  CHECK(p.radius_m.minCoeff() >= 0.0005);
+  CHECK(p.radius_m.maxCoeff() <= 0.001);
+  CHECK(solid_fraction(cavity, p) > 0.15);
+  CHECK(place_particles(settings, cavity, 0.0157).position_m == p.position_m);
+  // The most that stack: 210, 36 % of the volume (99 spheres of 2 mm, the lattice's, 37 %).
+  const ParticleSettings dense{210, 0.001, 0.002, 7800, 3};
+  REQUIRE(particles_that_fit(dense, cavity) == 210);
+  const Particles q = place_particles(dense, cavity, 0.0);
+  check_valid(q, cavity, 0.0);
+  CHECK(solid_fraction(cavity, q) > 0.36);
+  // More are refused, naming how many fit; so are more than the cavity holds at the
+  // smallest diameter.
+  for (const int count : {230, 3000}) {
+    CAPTURE(count);
+    const ParticleSettings many{count, 0.001, 0.002, 7800, 3};
+    CHECK(particles_that_fit(many, cavity) == 210);
+    try {
+      place_particles(many, cavity, 0.0);
+      FAIL("expected InputError");
+    } catch (const InputError& e) {
+      CHECK(std::string(e.what()).find("at most 210 spheres of diameters from 0.001 to 0.002 m can be placed") !=
+            std::string::npos);
+    }
+  }
+}
+
 TEST_CASE("overlapping spheres are separated from each other and from the walls") {
   const CavitySettings cavity{0.008, 0.008};
   Particles p(3);

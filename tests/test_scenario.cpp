@@ -136,6 +136,10 @@ TEST_CASE("gravity as a magnitude or a vector, diameters as a value or a range")
   const Scenario range = scenario_from("[particles]\ndiameter_m = 0.0008 0.001\ncount = 100\n");
   CHECK(range.particles.diameter_min_m == 0.0008);
   CHECK(range.particles.diameter_max_m == 0.001);
+  // Counted by the spheres' own sizes, not all at the largest (which holds 99 here).
+  CHECK(scenario_from("[cavity]\ndiameter_m = 0.012\nheight_m = 0.010\n[particles]\ndiameter_m = 0.001 0.002\n"
+                      "count = 100\n")
+            .particles.count == 100);
   CHECK(contains(input_error("[gravity]\ng_m_s2 = -9.81\n"), "gravity.g_m_s2"));
   CHECK(contains(input_error("[gravity]\ng_m_s2 = 1 2\n"), "three"));
   CHECK(contains(input_error("[particles]\ndiameter_m = 0.002 0.001\n"), "dmin <= dmax"));

@@ -362,6 +362,17 @@ TEST_CASE("submit checks everything before it writes: exit 2 with the reason, an
   CHECK(slurm.scripts().size() == 1);
   CHECK(read(db) == stored);
   CHECK(!std::filesystem::exists(dir / "runs.sqlite.shards/study-1/submit-2.sh"));
+  // A dry run of another definition under the stored study's name: refused as study run
+  // refuses it, naming the difference.
+  const auto changed = dir / "changed.ini";
+  std::string text = read(file);
+  text.replace(text.find("0.1:0.4:4"), 9, "0.1:0.5:4");
+  write(changed, text);
+  r = pdamp_cli({"study", "submit", changed.string(), "--slurm", "--dry-run", "--db", db.string()}, dir);
+  CHECK(r.code == 2);
+  CHECK(contains(r.err, "study 'four' (study 1 in '" + db.string() + "') was made from another definition:"));
+  CHECK(contains(r.err, "host.damping_N_s_m"));
+  CHECK(read(db) == stored);
 
   // Without sbatch: refused before anything is written.
   const auto other = dir / "other.sqlite";

@@ -170,9 +170,7 @@ std::pair<std::int64_t, std::vector<std::int64_t>> planned(const std::string& db
   {
     RunStore store(db, StoreAccess::read);
     if (const auto record = StudyStore(store).find_study(study.file.name)) {
-      if (!study::study_differences(study::stored_study(*record), study).empty()) {
-        study::find_or_create_study(store, study);  // refuses it, naming the differences
-      }
+      study::check_same_as_stored(*record, study, store.file());
       stored = record->study_id;
     } else {
       return {StudyStore(store).next_study_id(), all};

@@ -8,6 +8,8 @@
 #include <numeric>
 #include <random>
 #include <sstream>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include "pdamp/errors.hpp"
@@ -51,14 +53,15 @@ class HcpLattice {
 
   std::vector<Eigen::Vector3d> sites() const {
     std::vector<Eigen::Vector3d> sites;
-    for (double layer = 0.0; layer < layers_; ++layer) {
-      const int parity = static_cast<int>(std::fmod(layer, 2.0));
-      const double z = layer_z_m(layer);
-      for (double row = -half_rows_; row <= half_rows_; ++row) {
-        const Row r = row_sites(row, parity);
-        for (double col = r.first; col <= r.last; ++col) sites.emplace_back(x_m(col, r), r.y_m, z);
-      }
-    }
+    for (double layer = 0.0; layer < layers_; ++layer) add_layer(layer, sites);
+    return sites;
+  }
+
+  /// The lowest layer's sites (at z = radius_m), or how many, up to `cap`.
+  std::int64_t count_lowest_layer(std::int64_t cap) const { return layers_ > 0.0 ? count_layer(0, cap) : 0; }
+  std::vector<Eigen::Vector3d> lowest_layer_sites() const {
+    std::vector<Eigen::Vector3d> sites;
+    if (layers_ > 0.0) add_layer(0.0, sites);
     return sites;
   }
 
@@ -67,6 +70,15 @@ class HcpLattice {
   struct Row {
     double y_m, row_shift_m, layer_shift_m, first, last;
   };
+
+  void add_layer(double layer, std::vector<Eigen::Vector3d>& sites) const {
+    const int parity = static_cast<int>(std::fmod(layer, 2.0));
+    const double z = layer_z_m(layer);
+    for (double row = -half_rows_; row <= half_rows_; ++row) {
+      const Row r = row_sites(row, parity);
+      for (double col = r.first; col <= r.last; ++col) sites.emplace_back(x_m(col, r), r.y_m, z);
+    }
+  }
 
   double layer_z_m(double layer) const { return radius_m_ + layer * layer_gap_m_; }
   double x_m(double col, const Row& r) const { return col * spacing_m_ + r.row_shift_m + r.layer_shift_m; }
@@ -147,6 +159,97 @@ double padded_radius(const CavitySettings& cavity, double radius_m) {
   return radius_m + 1e-12 * std::max(cavity.diameter_m, cavity.height_m);
 }
 
+/// The widest spacing from 2 radius_m up to loose_m at which `sites(spacing)` still counts n
+/// sites: counts fall as the spacing grows (not strictly), so bisect on them.
+template <class Sites>
+double widest_spacing(double radius_m, double loose_m, std::int64_t n, Sites sites) {
+  double tight = 2.0 * radius_m, loose = loose_m;
+  for (int iteration = 0; iteration < 60; ++iteration) {
+    const double mid = 0.5 * (tight + loose);
+    (sites(mid) >= n ? tight : loose) = mid;
+  }
+  return tight;
+}
+
+/// The k-th largest (from 0) of n diameters spread evenly over the settings' range: the
+/// stacked spheres' sizes, the range's uniform distribution without a draw's scatter, so
+/// that whether they fit depends on n, the range and the cavity alone.
+double spread_diameter(const ParticleSettings& settings, std::int64_t k, std::int64_t n) {
+  const double step = (settings.diameter_max_m - settings.diameter_min_m) / static_cast<double>(n);
+  return settings.diameter_max_m - (static_cast<double>(k) + 0.5) * step;
+}
+
+/// A flat layer of a stack: its floor (cavity frame), the padded radius its lattice is
+/// spaced for, and the spheres [first, first + count) it holds, largest first.
+struct Layer {
+  double floor_m, radius_m;
+  std::int64_t first, count;
+};
+
+/// n spheres of the range (spread_diameter), largest first, stacked from the floor in flat
+/// layers: each the lowest layer of the lattice for its first (largest) sphere, filled in
+/// order, the next one's floor at its top. A sphere stays within its layer's slab and its
+/// share of its lattice, so none touch. Calls `visit` with each layer (none kept: a narrow
+/// cavity may stack millions), until the spheres or the cavity's height run out; returns how
+/// many spheres the layers hold.
+template <class Visit>
+std::int64_t stack_layers(const ParticleSettings& settings, std::int64_t n, const CavitySettings& cavity, Visit visit) {
+  double floor_m = 0.0;
+  std::int64_t first = 0;
+  while (first < n) {
+    const double r = padded_radius(cavity, spread_diameter(settings, first, n) / 2.0);
+    const std::int64_t sites =
+        HcpLattice({cavity.diameter_m, cavity.height_m - floor_m}, r, 2.0 * r).count_lowest_layer(n - first);
+    if (sites == 0) break;
+    visit(Layer{floor_m, r, first, sites});
+    first += sites;
+    floor_m += 2.0 * r;
+  }
+  return first;
+}
+
+bool stacks(const ParticleSettings& settings, std::int64_t n, const CavitySettings& cavity) {
+  return stack_layers(settings, n, cavity, [](const Layer&) {}) == n;
+}
+
+/// The spheres stacked (stack_layers), each layer's on random sites of its lattice in a
+/// random order of their sizes, each jittered within the slack its own size leaves there.
+Particles place_stacked(const ParticleSettings& settings, const CavitySettings& cavity, double host_z_m) {
+  std::mt19937_64 rng(settings.seed);
+  Particles particles(settings.count);
+  stack_layers(settings, settings.count, cavity, [&](const Layer& layer) {
+    const CavitySettings above{cavity.diameter_m, cavity.height_m - layer.floor_m};
+    const auto sites_at = [&](double spacing) {
+      return HcpLattice(above, layer.radius_m, spacing).count_lowest_layer(layer.count + 1);
+    };
+    // The last layer may have far more sites than spheres: listed at the widest spacing
+    // that holds them, as many as about the spheres.
+    const double spacing = sites_at(2.0 * layer.radius_m) > layer.count
+                               ? widest_spacing(layer.radius_m, 2.0 * cavity.radius_m(), layer.count, sites_at)
+                               : 2.0 * layer.radius_m;
+    std::vector<Eigen::Vector3d> sites = HcpLattice(above, layer.radius_m, spacing).lowest_layer_sites();
+    std::shuffle(sites.begin(), sites.end(), rng);
+    sites.resize(static_cast<std::size_t>(layer.count));
+    std::sort(sites.begin(), sites.end(), [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return std::tie(a.y(), a.x()) < std::tie(b.y(), b.x());
+    });
+    std::vector<Eigen::Index> order(sites.size());
+    std::iota(order.begin(), order.end(), layer.first);
+    std::shuffle(order.begin(), order.end(), rng);
+    for (std::size_t k = 0; k < sites.size(); ++k) {
+      const Eigen::Index i = layer.first + static_cast<Eigen::Index>(k);
+      const double d = spread_diameter(settings, order[k], settings.count);
+      const double r = padded_radius(cavity, d / 2.0);
+      const Eigen::Vector3d site = sites[k] + Eigen::Vector3d(0.0, 0.0, layer.floor_m);
+      const Eigen::Vector3d centre = project_into_cavity(site + (layer.radius_m - r) * random_in_ball(rng), cavity, r);
+      particles.position_m.col(i) = centre + Eigen::Vector3d(0.0, 0.0, host_z_m);
+      particles.radius_m[i] = d / 2.0;
+      particles.mass_kg[i] = settings.density_kg_m3 * std::numbers::pi / 6.0 * d * d * d;
+    }
+  });
+  return particles;
+}
+
 }  // namespace
 
 int max_particles_that_fit(const CavitySettings& cavity, double diameter_m) {
@@ -159,13 +262,40 @@ double solid_fraction(const CavitySettings& cavity, const Particles& particles) 
   return spheres_m3 / (std::numbers::pi * cavity.radius_m() * cavity.radius_m() * cavity.height_m);
 }
 
+int particles_that_fit(const ParticleSettings& settings, const CavitySettings& cavity) {
+  const int on_lattice = max_particles_that_fit(cavity, settings.diameter_max_m);
+  if (settings.count <= on_lattice || settings.diameter_min_m == settings.diameter_max_m) {
+    return std::min(settings.count, on_lattice);
+  }
+  // None takes less room than the smallest: more than the cavity's volume holds of those
+  // cannot fit, found before any is stacked. The most that stack below that, by bisection:
+  // fewer spheres of a range are as large or smaller ones, never harder to stack.
+  const double smallest_m3 = std::numbers::pi / 6.0 * std::pow(settings.diameter_min_m, 3);
+  const double cavity_m3 = std::numbers::pi * cavity.radius_m() * cavity.radius_m() * cavity.height_m;
+  auto not_fits = static_cast<std::int64_t>(std::min(settings.count + 0.0, std::floor(cavity_m3 / smallest_m3) + 1.0));
+  if (not_fits == settings.count && stacks(settings, settings.count, cavity)) return settings.count;
+  std::int64_t fits = on_lattice;
+  while (not_fits - fits > 1) {
+    const std::int64_t mid = fits + (not_fits - fits) / 2;
+    (stacks(settings, mid, cavity) ? fits : not_fits) = mid;
+  }
+  return static_cast<int>(fits);
+}
+
+std::string describe_spheres(const ParticleSettings& settings) {
+  std::ostringstream text;
+  if (settings.diameter_min_m == settings.diameter_max_m) {
+    text << "spheres of diameter " << settings.diameter_max_m << " m";
+  } else {
+    text << "spheres of diameters from " << settings.diameter_min_m << " to " << settings.diameter_max_m << " m";
+  }
+  return text.str();
+}
+
 void check_particles_fit(const ParticleSettings& settings, const CavitySettings& cavity) {
-  const double d_max = settings.diameter_max_m;
-  if (const int capacity = max_particles_that_fit(cavity, d_max); settings.count > capacity) {
-    std::ostringstream msg;
-    msg << "particles.count = " << settings.count << ": at most " << capacity << " spheres of diameter " << d_max
-        << " m can be placed in the cavity";
-    throw InputError(msg.str());
+  if (const int capacity = particles_that_fit(settings, cavity); settings.count > capacity) {
+    throw InputError("particles.count = " + std::to_string(settings.count) + ": at most " + std::to_string(capacity) +
+                     " " + describe_spheres(settings) + " can be placed in the cavity");
   }
 }
 
@@ -175,16 +305,12 @@ Particles place_particles(const ParticleSettings& settings, const CavitySettings
   const double d_max = settings.diameter_max_m;
   Particles particles(n);
   if (n == 0) return particles;
+  if (n > max_particles_that_fit(cavity, d_max)) return place_stacked(settings, cavity, host_z_m);
 
-  // The widest lattice that still has a site for every sphere leaves the most room to
-  // jitter. Site counts fall as the spacing grows (not strictly), so bisect on them.
+  // The widest lattice that still has a site for every sphere leaves the most room to jitter.
   const double r_max = padded_radius(cavity, d_max / 2.0);
-  double tight = 2.0 * r_max, loose = std::max(2.0 * cavity.radius_m(), cavity.height_m);
-  for (int iteration = 0; iteration < 60; ++iteration) {
-    const double mid = 0.5 * (tight + loose);
-    (HcpLattice(cavity, r_max, mid).count(n) >= n ? tight : loose) = mid;
-  }
-  const double spacing = tight;
+  const double spacing = widest_spacing(r_max, std::max(2.0 * cavity.radius_m(), cavity.height_m), n,
+                                        [&](double s) { return HcpLattice(cavity, r_max, s).count(n); });
   std::vector<Eigen::Vector3d> sites = HcpLattice(cavity, r_max, spacing).sites();
 
   std::mt19937_64 rng(settings.seed);

@@ -537,11 +537,11 @@ void check_particles(const Scenario& s, const RawScenario& raw) {
         << " they may have: a smaller cavity or larger spheres";
     reject(value_of(raw, "cavity.diameter_m"), value_of(raw, "cavity.height_m"), why.str());
   }
-  const int capacity = max_particles_that_fit(s.cavity, d);
+  const int capacity = particles_that_fit(s.particles, s.cavity);
   if (s.particles.count > capacity) {
     std::ostringstream why;
-    why << "at most " << capacity << " spheres of diameter " << d
-        << " m can be placed in this cavity (D = " << s.cavity.diameter_m << " m, H = " << s.cavity.height_m << " m)";
+    why << "at most " << capacity << " " << describe_spheres(s.particles)
+        << " can be placed in this cavity (D = " << s.cavity.diameter_m << " m, H = " << s.cavity.height_m << " m)";
     reject(value_of(raw, "particles.count"), why.str());
   }
 }

@@ -366,14 +366,18 @@ void check_same_study(const Study& stored, const Study& now, const std::string& 
   if (!differences.empty()) throw InputError(what + join_lines(differences) + "\n" + way_out);
 }
 
+void check_same_as_stored(const StudyRecord& record, const Study& study, const std::filesystem::path& file) {
+  check_same_study(stored_study(record), study,
+                   "study '" + study.file.name + "' (study " + std::to_string(record.study_id) + " in '" +
+                       file.string() + "') was made from another definition:",
+                   "run it unchanged to resume it, or give this one another [study] name or --db");
+}
+
 std::int64_t find_or_create_study(RunStore& store, const Study& study) {
   StudyStore studies(store);
   for (int tries = 0;; ++tries) {
     if (const auto record = studies.find_study(study.file.name)) {
-      check_same_study(stored_study(*record), study,
-                       "study '" + study.file.name + "' (study " + std::to_string(record->study_id) + " in '" +
-                           store.file().string() + "') was made from another definition:",
-                       "run it unchanged to resume it, or give this one another [study] name or --db");
+      check_same_as_stored(*record, study, store.file());
       return record->study_id;
     }
     std::vector<NewStudyPoint> points;

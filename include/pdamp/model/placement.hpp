@@ -3,10 +3,13 @@
 /// from the seed. Spheres go to a random subset of the sites of a hexagonal close-packed
 /// lattice whose spacing is as wide as the count allows, each jittered at random within
 /// its share of the slack, so even dense fills (up to ≈ 0.55 solid fraction) place
-/// without the jamming of random sequential addition. The settling phase that follows
-/// (soft engine) erases the lattice.
+/// without the jamming of random sequential addition. A range of diameters that this
+/// lattice, spaced for the largest, cannot hold is stacked from the floor in flat layers by
+/// size, largest first, each sphere by its own size, the sizes spread evenly over the range
+/// (particles_that_fit). The settling phase that follows (soft engine) erases both.
 
 #include <cstdint>
+#include <string>
 
 #include "pdamp/model/particles.hpp"
 #include "pdamp/scenario/scenario.hpp"
@@ -24,7 +27,16 @@ int max_particles_that_fit(const CavitySettings& cavity, double diameter_m);
 /// The spheres' volume over the cavity's (the fill of a damper).
 double solid_fraction(const CavitySettings& cavity, const Particles& particles);
 
-/// Throws InputError if `settings.count` spheres do not fit (max_particles_that_fit).
+/// The most spheres of `settings` the generator can place, up to `settings.count`: of one
+/// diameter, max_particles_that_fit; of a range, also as many as stack by size (spread
+/// evenly over the range, so it depends on the count, the range and the cavity, not the
+/// seed), which their volumes decide, not the largest's.
+int particles_that_fit(const ParticleSettings& settings, const CavitySettings& cavity);
+
+/// "spheres of diameter D m", or "of diameters from A to B m", for messages.
+std::string describe_spheres(const ParticleSettings& settings);
+
+/// Throws InputError if `settings.count` spheres do not fit (particles_that_fit).
 void check_particles_fit(const ParticleSettings& settings, const CavitySettings& cavity);
 
 /// Places `settings.count` spheres with the cavity bottom at z = host_z_m, at rest.

@@ -70,6 +70,10 @@ NewStudyPoint stored_point(const Study& study, const StudyPoint& point);
 /// if `now` would run other points than `stored`.
 void check_same_study(const Study& stored, const Study& now, const std::string& what, const std::string& way_out);
 
+/// Throws InputError naming every difference if the study stored under `study`'s name in
+/// the store `file` (`record`) would run other points: one definition per name in a store.
+void check_same_as_stored(const StudyRecord& record, const Study& study, const std::filesystem::path& file);
+
 /// Finds the study of this name in the store, or stores it with its points. Throws
 /// InputError, writing nothing, if a stored study of this name would run other points,
 /// naming every difference. Returns the study's id.

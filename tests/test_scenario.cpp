@@ -378,12 +378,18 @@ TEST_CASE("the host's initial state and its excitation keep it within 100 cavity
   CHECK(scenario_from(base + "[excitation]\namplitude_m = 0.7\n").excitation.amplitude_m == 0.7);
   CHECK(contains(input_error(base + "[excitation]\namplitude_m = 1e300\n"),
                  "excitation.amplitude_m = '1e300': must be at most 100 cavity heights (0.704 m)"));
-  // At 20 Hz: |470 - 0.0376 (2 pi 20)^2 + i 0.1 (2 pi 20)| = 124.39 N/m, so at most 87.57 N.
+  // At 20 Hz: max(470, 0.0376 (2 pi 20)^2) = 593.77 N/m, so at most 418.0 N.
   const std::string force = "[excitation]\nmode = force\nfrequency_hz = 20\n[host]\nz0_m = 0\n" + table1;
-  CHECK(scenario_from(force + "[excitation]\nforce_N = 87\n").excitation.force_N == 87);
-  CHECK(contains(input_error(force + "[excitation]\nforce_N = 88\n"),
-                 "excitation.force_N = '88': would drive the host to a steady amplitude of 0.707"));
-  CHECK(contains(input_error(force + "[excitation]\nforce_N = 1e300\n"), "at most 87.57"));
+  CHECK(scenario_from(force + "[excitation]\nforce_N = 418\n").excitation.force_N == 418);
+  CHECK(contains(input_error(force + "[excitation]\nforce_N = 419\n"),
+                 "excitation.force_N = '419': would move the host by 0.7056"));
+  CHECK(contains(input_error(force + "[excitation]\nforce_N = 1e300\n"), "at most 418.0"));
+  // At resonance a lightly damped host alone would go far (1 N / (0.01 N s/m 111.8 rad/s) =
+  // 0.89 m); the damper is what keeps it from that, so the force is not refused for it.
+  CHECK(scenario_from("[excitation]\nmode = force\nfrequency_hz = 17.79\nforce_N = 1\n[host]\nz0_m = "
+                      "0\ndamping_N_s_m = 0.01\n" +
+                      table1)
+            .excitation.force_N == 1);
   // Prescribed motion uses neither key (and refuses them if given).
   CHECK(scenario_from("[excitation]\nmode = prescribed\namplitude_m = 0.001\nfrequency_hz = 50\n").host.z0_m == 0.0157);
 }

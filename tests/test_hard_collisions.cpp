@@ -518,19 +518,29 @@ TEST_CASE(
   Scenario s = test::scenario_from("[hard]\nen = 0.6\nmu = 0.3\nbeta0 = 0.2\n[hard_wall]\nen = 0.4\n");
   const ContactLaws constant(s, nullptr);
   const double slow = 0.5 * s.hard_resting.elastic_speed_m_s, fast = 2.0 * s.hard_resting.elastic_speed_m_s;
-  CHECK(constant.at(fast, false, false).en == 0.6);
-  CHECK(constant.at(fast, true, false).en == 0.4);
-  CHECK(constant.at(fast, false, false).mu == 0.3);
-  CHECK(constant.at(slow, false, false).en == 1.0);
-  CHECK(constant.at(slow, true, false).en == 1.0);
-  CHECK(constant.at(slow, false, true).en == 0.6);  // wedged: the sequence must die out
+  CHECK(constant.at(fast, Partner::sphere, false).en == 0.6);
+  CHECK(constant.at(fast, Partner::cap, false).en == 0.4);
+  CHECK(constant.at(fast, Partner::sphere, false).mu == 0.3);
+  CHECK(constant.at(slow, Partner::sphere, false).en == 1.0);
+  CHECK(constant.at(slow, Partner::cap, false).en == 1.0);
+  CHECK(constant.at(slow, Partner::sphere, true).en == 0.6);  // wedged: the sequence must die out
+  CHECK(constant.at(fast, Partner::side_wall, false).en == 0.4);
+  CHECK(constant.at(slow, Partner::side_wall, false).en == 1.0);
+  // The side wall has an elastic speed of its own: raising the others' leaves its law.
+  Scenario raised = s;
+  raised.hard_resting.elastic_speed_m_s = 0.1;
+  const ContactLaws dense(raised, nullptr);
+  CHECK(dense.at(0.05, Partner::sphere, false).en == 1.0);
+  CHECK(dense.at(0.05, Partner::cap, false).en == 1.0);
+  CHECK(dense.at(0.05, Partner::side_wall, false).en == 0.4);
+  CHECK(dense.at(0.5 * raised.hard_resting.side_wall_elastic_speed_m_s, Partner::side_wall, false).en == 1.0);
   RestitutionTable table;
   table.sphere_sphere = {{0.01, 1.0}, {0.9, 0.5}, {0.3, 0.1}};
   table.sphere_wall = {{0.01, 1.0}, {0.8, 0.4}, {0.2, 0.0}};
   const ContactLaws calibrated(s, &table);
-  CHECK(calibrated.at(0.1, false, false).en == doctest::Approx(0.7).epsilon(1e-12));  // halfway in log(speed)
-  CHECK(calibrated.at(0.1, true, false).beta0 == doctest::Approx(0.1).epsilon(1e-12));
-  CHECK(calibrated.at(slow, false, false).en == 1.0);
+  CHECK(calibrated.at(0.1, Partner::sphere, false).en == doctest::Approx(0.7).epsilon(1e-12));  // halfway in log(speed)
+  CHECK(calibrated.at(0.1, Partner::cap, false).beta0 == doctest::Approx(0.1).epsilon(1e-12));
+  CHECK(calibrated.at(slow, Partner::sphere, false).en == 1.0);
 }
 
 TEST_CASE("sticking to the host: a free host shares the body's vertical momentum, a prescribed one does the work") {

@@ -85,6 +85,7 @@ ContactLaws::ContactLaws(const Scenario& scenario, const RestitutionTable* calib
       wall_(scenario.hard_wall),
       calibration_(calibration ? std::optional<RestitutionTable>(*calibration) : std::nullopt),
       elastic_speed_m_s_(scenario.hard_resting.elastic_speed_m_s),
+      side_wall_elastic_speed_m_s_(scenario.hard_resting.side_wall_elastic_speed_m_s),
       tc_window_(scenario.hard_resting.tc_window),
       sphere_kn_N_m1_5_(scenario.soft_particle.kn_N_m1_5),
       wall_kn_N_m1_5_(scenario.soft_wall.kn_N_m1_5) {}
@@ -95,14 +96,16 @@ bool ContactLaws::within_tc_window(double since_s, double effective_mass_kg, boo
                                                      approach_speed_m_s);
 }
 
-HardContactLaw ContactLaws::at(double approach_speed_m_s, bool wall, bool repeat, bool lasting) const {
+HardContactLaw ContactLaws::at(double approach_speed_m_s, Partner partner, bool repeat, bool lasting) const {
+  const bool wall = partner != Partner::sphere;
   HardContactLaw law = wall ? wall_ : sphere_;
   if (calibration_) {
     const RestitutionCurve& curve = wall ? calibration_->sphere_wall : calibration_->sphere_sphere;
     law.en = curve.en_at(approach_speed_m_s);
     law.beta0 = curve.beta0_at(approach_speed_m_s);
   }
-  if ((approach_speed_m_s < elastic_speed_m_s_ || lasting) && !repeat) law.en = 1.0;
+  const double elastic_speed_m_s = partner == Partner::side_wall ? side_wall_elastic_speed_m_s_ : elastic_speed_m_s_;
+  if ((approach_speed_m_s < elastic_speed_m_s || lasting) && !repeat) law.en = 1.0;
   return law;
 }
 

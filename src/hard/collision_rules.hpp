@@ -58,18 +58,23 @@ CollisionOutcome walton_collision(const Eigen::Vector3d& relative_velocity, cons
 /// K·p for the mobility above.
 Eigen::Vector3d apply_mobility(const Mobility& mobility, const Eigen::Vector3d& normal, const Eigen::Vector3d& p);
 
+/// What a sphere collides with, as far as the law goes: a sphere (free or riding), a cap
+/// or the side wall.
+enum class Partner { sphere, cap, side_wall };
+
 /// The laws of the engine's collisions: the scenario's constants, or with a `calibration`
 /// the soft law's e_n(v) and β0(v) at each impact speed; e_n = 1 for a slow approach.
 class ContactLaws {
  public:
   ContactLaws(const Scenario& scenario, const RestitutionTable* calibration);
   /// The law of a collision with a sphere or a wall at this approach speed. Approaches
-  /// slower than the elastic speed are elastic (which stops inelastic collapse in
-  /// flight), unless a sphere involved has collided at this instant already (`repeat`:
-  /// wedged between two bodies, the sequence must die out, not bounce for ever).
-  /// `lasting`: within the TC window of an earlier collision (within_tc_window), elastic too.
-  HardContactLaw at(double approach_speed_m_s, bool wall, bool repeat, bool lasting = false) const;
-  double elastic_speed_m_s() const { return elastic_speed_m_s_; }
+  /// slower than the elastic speed (the side wall's own for the side wall) are elastic
+  /// (which stops inelastic collapse in flight), unless a sphere involved has collided at
+  /// this instant already (`repeat`: wedged between two bodies, the sequence must die out,
+  /// not bounce for ever). `lasting`: within the TC window of an earlier collision
+  /// (within_tc_window), elastic too.
+  HardContactLaw at(double approach_speed_m_s, Partner partner, bool repeat, bool lasting = false) const;
+  double side_wall_elastic_speed_m_s() const { return side_wall_elastic_speed_m_s_; }
   /// Whether the TC model is on (hard.tc_window > 0).
   bool tc_model() const { return tc_window_ > 0.0; }
   /// Whether a collision `since_s` after an earlier one of a sphere it involves falls within
@@ -80,7 +85,7 @@ class ContactLaws {
  private:
   HardContactLaw sphere_, wall_;
   std::optional<RestitutionTable> calibration_;
-  double elastic_speed_m_s_;
+  double elastic_speed_m_s_, side_wall_elastic_speed_m_s_;
   double tc_window_, sphere_kn_N_m1_5_, wall_kn_N_m1_5_;
 };
 

@@ -282,14 +282,15 @@ void HardEngine::handle(const Event& e) {
   }
 }
 
-inline HardContactLaw HardEngine::law_for(double approach_speed_m_s, bool wall, int i, int j, int rider) {
+inline HardContactLaw HardEngine::law_for(double approach_speed_m_s, Partner partner, int i, int j, int rider) {
   // A sphere wedged between two bodies collides again at the same instant (ContactLaws).
   SphereState& a = flight_.sphere(i);
   const bool repeat = a.last_collision_s == t_s_ || (j >= 0 && flight_.sphere(j).last_collision_s == t_s_);
-  const bool lasting = laws_.tc_model() && within_tc_window(approach_speed_m_s, wall, i, j, rider);
+  const bool lasting =
+      laws_.tc_model() && within_tc_window(approach_speed_m_s, partner != Partner::sphere, i, j, rider);
   a.last_collision_s = t_s_;
   if (j >= 0) flight_.sphere(j).last_collision_s = t_s_;
-  return laws_.at(approach_speed_m_s, wall, repeat, lasting);
+  return laws_.at(approach_speed_m_s, partner, repeat, lasting);
 }
 
 bool HardEngine::within_tc_window(double approach_speed_m_s, bool wall, int i, int j, int rider) const {
@@ -327,7 +328,7 @@ void HardEngine::collide_spheres(int i, int j) {
     diagnose(EventDiagnosis::sphere_sphere, i, j, approach);
   if (clusters_.enabled() && join_clusters(i, j, approach)) [[unlikely]]
     return;
-  const HardContactLaw law = law_for(approach, false, i, j);
+  const HardContactLaw law = law_for(approach, Partner::sphere, i, j);
   const CollisionOutcome out = walton_collision(u, n, approach, sphere_mobility(mi) + sphere_mobility(mj), law);
   const Eigen::Vector3d& p = out.impulse_N_s;
   const Eigen::Vector3d torque_arm = n.cross(p);
@@ -430,12 +431,12 @@ void HardEngine::collide_wall(int i, EventKind wall) {
                                     : n.z() * (particles.velocity_m_s(2, i) - host.v_m_s);
   if (diagnosis_) [[unlikely]]
     diagnose(side_wall ? EventDiagnosis::side_wall : EventDiagnosis::cap, i, -1, approach);
-  const HardContactLaw law = law_for(approach, true, i, -1);
+  const HardContactLaw law = law_for(approach, side_wall ? Partner::side_wall : Partner::cap, i, -1);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
   const HostState after = apply_host_impulse(i, n, out, host);
   if (side_wall) {
-    particles.velocity_m_s.col(i).head<2>() =
-        turned_along_side_wall(particles.velocity_m_s.col(i).head<2>(), n.head<2>(), laws_.elastic_speed_m_s());
+    particles.velocity_m_s.col(i).head<2>() = turned_along_side_wall(particles.velocity_m_s.col(i).head<2>(),
+                                                                     n.head<2>(), laws_.side_wall_elastic_speed_m_s());
     if (after.v_m_s != host.v_m_s) restart_host(after);
     predict(i);
   } else {
@@ -479,7 +480,7 @@ void HardEngine::collide_rider(int i, int j) {
   const Mobility mobility = sphere_mobility(particles.mass_kg[i]) + Mobility{0, 0, host_.inverse_mass_1_kg()};
   if (diagnosis_) [[unlikely]]
     diagnose(EventDiagnosis::rider, i, j, approach);
-  const HardContactLaw law = law_for(approach, false, i, -1, j);
+  const HardContactLaw law = law_for(approach, Partner::sphere, i, -1, j);
   const CollisionOutcome out = walton_collision(u, n, approach, mobility, law);
   rest_if_slow(i, -n, j, host, apply_host_impulse(i, n, out, host, j));
 }

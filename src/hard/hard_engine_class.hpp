@@ -87,11 +87,12 @@ class HardEngine final : public Engine {
   static void transfer(Self& self, Archive& archive);
   /// Lab-frame position of any sphere now (free or riding).
   Eigen::Vector3d position_now(int i, const HostState& host) const;
-  /// The law of a collision of i with j (−1 for a wall or rider; `rider`, the rider) at
-  /// this approach speed (ContactLaws); records the collision's time.
+  /// The law of a collision of i with `partner`: j (−1 for a wall or rider; `rider`, the
+  /// rider) at this approach speed (ContactLaws); records the collision's time.
   /// Always inlined into the collisions, as before the TC window (as a call it cost the gas
   /// 0.9 % more instructions per collision: tools/bench/HISTORY.md).
-  [[gnu::always_inline]] HardContactLaw law_for(double approach_speed_m_s, bool wall, int i, int j, int rider = -1);
+  [[gnu::always_inline]] HardContactLaw law_for(double approach_speed_m_s, Partner partner, int i, int j,
+                                                int rider = -1);
   /// Whether the collision of i with j (or `rider`, or a wall) falls within the TC window
   /// of an earlier collision of i or j (before law_for records this one).
   [[gnu::noinline]] bool within_tc_window(double approach_speed_m_s, bool wall, int i, int j, int rider) const;

@@ -379,6 +379,10 @@ const std::vector<KeySpec>& key_specs() {
     k.push_back({"hard.elastic_speed_m_s", text(d.hard_resting.elastic_speed_m_s), "m/s",
                  "collisions with a normal approach speed below this are elastic (stops inelastic collapse)",
                  number(PDAMP_FIELD(hard_resting.elastic_speed_m_s), non_negative), ""});
+    k.push_back({"hard.side_wall_elastic_speed_m_s", text(d.hard_resting.side_wall_elastic_speed_m_s), "m/s",
+                 "the same for collisions with the side wall, on its own (a loose bed's friction against the wall "
+                 "needs the wall's inelastic law)",
+                 number(PDAMP_FIELD(hard_resting.side_wall_elastic_speed_m_s), non_negative), ""});
     k.push_back({"hard.tc_window", text(d.hard_resting.tc_window), "t_c",
                  "TC model: a collision within this many soft contact times (Hertz, at its approach speed) of an "
                  "earlier collision of a sphere it involves is elastic in the normal direction; 0 = off",

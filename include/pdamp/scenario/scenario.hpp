@@ -96,6 +96,10 @@ struct HardRestingSettings {
   /// Collisions whose normal approach speed is below this are elastic in the normal
   /// direction, which stops inelastic collapse (infinitely many collisions in finite time).
   double elastic_speed_m_s = 1e-4;
+  /// The same for collisions with the side wall, on its own: a loose bed that its host
+  /// catches gently is held and dragged by its friction against the wall, which bounces off
+  /// the wall would lose (docs/hard-engine.md, "Settings for dense beds").
+  double side_wall_elastic_speed_m_s = 1e-4;
   /// Luding & McNamara's TC model: a collision within this many soft contact times t_c
   /// (the Hertz contact of the soft law at its approach speed) of an earlier collision of
   /// a sphere it involves is elastic in the normal direction; 0 turns it off.

@@ -671,7 +671,7 @@ TEST_CASE("a store lacking one of pdamp's views or tables is refused by every co
   CHECK(file_bytes(db) == before);
 }
 
-TEST_CASE("progress on a terminal: percent and time left on one line") {
+TEST_CASE("progress on a terminal: percent and time left on one line, for a run and for it resumed") {
   test::TempDir dir("cli-terminal");
   const std::string text =
       stderr_on_terminal({"run", "--scenario", table1(), "--model", "soft", "--set", "particles.count=0", "--set",
@@ -683,6 +683,12 @@ TEST_CASE("progress on a terminal: percent and time left on one line") {
   CHECK(text.find(" of 200.0000 s, ") != std::string::npos);
   CHECK(text.find(" %, ") != std::string::npos);
   CHECK(text.find(" left\x1b[K") != std::string::npos);
+  // Resumed, it shows the same: the time left from the work done since the resume.
+  const std::string resumed = stderr_on_terminal({"resume", "1", "--db", (dir / "runs.sqlite").string()}, dir, 4.0);
+  INFO(resumed);
+  CHECK(resumed.find("\r  resumed run: t = ") != std::string::npos);
+  CHECK(resumed.find(" of 200.0000 s, ") != std::string::npos);
+  CHECK(resumed.find(" left\x1b[K") != std::string::npos);
 }
 
 TEST_CASE("a FIFO as the scenario is refused at once, not waited on") {

@@ -202,13 +202,17 @@ int resume_command(const std::string& run_id_text, std::optional<double> until_s
     }
     return complete_comparison(store, *comparison, terminal, checkpoint_interval);
   }
+  // Where the run will end, for its percentage and time left (a missing run is refused by
+  // resume_and_store).
+  std::optional<double> end_s = until_s;
+  if (const auto summary = store.summary(run_id); summary && !end_s) end_s = summary->duration_s;
   install_stop_handlers();
   Progress progress(std::cerr, terminal);
   RunControl control;
   control.stop = &stop_requested;
   control.checkpoint_interval = checkpoint_interval;
-  control.progress = [&progress, begun = false](double t) mutable {
-    if (!begun) progress.begin("resumed run");
+  control.progress = [&progress, end_s, begun = false](double t) mutable {
+    if (!begun) progress.begin("resumed run", end_s);
     begun = true;
     progress.update(t);
   };

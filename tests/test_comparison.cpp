@@ -61,9 +61,9 @@ TEST_CASE("compare_runs: the envelope, the frequency and the onset of Γ < 1 of 
   CHECK(c.hard_run_id == 2);
   // |hard - soft| / (the soft run's first amplitude) at 0.5, 1.5, 2.5, 3.5 s: 0.5, 1.5, 2.5, 3.5.
   REQUIRE(c.envelope_max_rel_diff);
-  CHECK(*c.envelope_max_rel_diff == doctest::Approx(3.5).epsilon(1e-15));
+  CHECK(*c.envelope_max_rel_diff == doctest::Approx(3.5).scale(1.0).epsilon(1e-15));
   REQUIRE(c.envelope_rms_rel_diff);
-  CHECK(*c.envelope_rms_rel_diff == doctest::Approx(std::sqrt(21.0 / 4)).epsilon(1e-15));
+  CHECK(*c.envelope_rms_rel_diff == doctest::Approx(std::sqrt(21.0 / 4)).scale(1.0).epsilon(1e-15));
   // The mean frequency of the cycles with Γ < 1, and where the first of them starts.
   CHECK(c.small_amplitude_freq_soft_hz == 21.0);
   CHECK(c.small_amplitude_freq_hard_hz == 30.0);
@@ -81,8 +81,8 @@ TEST_CASE("compare_runs: ψ by Γ bin (2^k up to 2^(k+1)), each model's mean and
   CHECK(low.gamma_high == 1.0);
   REQUIRE(low.psi_soft);
   REQUIRE(low.psi_hard);
-  CHECK(*low.psi_soft == doctest::Approx(0.2));
-  CHECK(*low.psi_hard == doctest::Approx(0.4));
+  CHECK(*low.psi_soft == test::relative(0.2));
+  CHECK(*low.psi_hard == test::relative(0.4));
   CHECK(low.cycles_soft == 2);
   CHECK(low.cycles_hard == 1);
   const auto& high = c.psi_bins[1];
@@ -90,21 +90,21 @@ TEST_CASE("compare_runs: ψ by Γ bin (2^k up to 2^(k+1)), each model's mean and
   CHECK(high.gamma_high == 8.0);
   REQUIRE(high.psi_soft);
   REQUIRE(high.psi_hard);
-  CHECK(*high.psi_soft == doctest::Approx(0.2));
-  CHECK(*high.psi_hard == doctest::Approx(0.6));
+  CHECK(*high.psi_soft == test::relative(0.2));
+  CHECK(*high.psi_hard == test::relative(0.6));
   CHECK(high.cycles_soft == 2);
   CHECK(high.cycles_hard == 2);
   REQUIRE(c.psi_mean_abs_diff);
-  CHECK(*c.psi_mean_abs_diff == doctest::Approx((0.2 + 0.4) / 2));
+  CHECK(*c.psi_mean_abs_diff == test::relative((0.2 + 0.4) / 2));
 }
 
 TEST_CASE("compare_runs: the energy dissipated at fixed times up to the shorter run, the counts and wall times") {
   const ComparisonRecord c = compare_runs(soft_run(), hard_run());
   // At the end of each run: 6 J per second for 1 s, 3 J per second for 0.8 s.
-  CHECK(c.dissipated_soft_J == doctest::Approx(6.0));
-  CHECK(c.dissipated_hard_J == doctest::Approx(2.4));
+  CHECK(c.dissipated_soft_J == doctest::Approx(6.0).scale(1.0));
+  CHECK(c.dissipated_hard_J == doctest::Approx(2.4).scale(1.0));
   REQUIRE(c.dissipated_rel_diff);
-  CHECK(*c.dissipated_rel_diff == doctest::Approx(-0.6));
+  CHECK(*c.dissipated_rel_diff == doctest::Approx(-0.6).scale(1.0));
   // 0.05 s (the last sample before it is at 0), 0.1, 0.2, 0.5 s and the hard run's end, 0.8 s.
   const double times[] = {0.05, 0.1, 0.2, 0.5, 0.8};
   REQUIRE(c.energy.size() == 2 * std::size(times));
@@ -116,11 +116,11 @@ TEST_CASE("compare_runs: the energy dissipated at fixed times up to the shorter 
     CHECK(soft.model == "soft");
     CHECK(hard.model == "hard");
     const double sampled_s = i == 0 ? 0.0 : times[i];
-    CHECK(soft.impact_J == doctest::Approx(sampled_s));
-    CHECK(soft.friction_J == doctest::Approx(2 * sampled_s));
-    CHECK(soft.viscous_J == doctest::Approx(3 * sampled_s));
-    CHECK(hard.impact_J == doctest::Approx(0.5 * sampled_s));
-    CHECK(hard.viscous_J == doctest::Approx(1.5 * sampled_s));
+    CHECK(soft.impact_J == doctest::Approx(sampled_s).scale(1.0));
+    CHECK(soft.friction_J == doctest::Approx(2 * sampled_s).scale(1.0));
+    CHECK(soft.viscous_J == doctest::Approx(3 * sampled_s).scale(1.0));
+    CHECK(hard.impact_J == doctest::Approx(0.5 * sampled_s).scale(1.0));
+    CHECK(hard.viscous_J == doctest::Approx(1.5 * sampled_s).scale(1.0));
   }
   CHECK(c.wall_time_soft_s == 10.0);
   CHECK(c.wall_time_hard_s == 2.5);
@@ -139,7 +139,7 @@ TEST_CASE("compare_runs: runs without cycles have no cycle metrics, a run withou
   CHECK_FALSE(c.gamma_below_1_hard_s);
   CHECK(c.psi_bins.empty());
   CHECK_FALSE(c.psi_mean_abs_diff);
-  CHECK(c.dissipated_soft_J == doctest::Approx(6.0));
+  CHECK(c.dissipated_soft_J == doctest::Approx(6.0).scale(1.0));
   hard.samples.clear();
   CHECK_THROWS_WITH_AS(compare_runs(soft, hard), doctest::Contains("run 2 has no samples"), InputError);
 }

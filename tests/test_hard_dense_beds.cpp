@@ -127,7 +127,7 @@ TEST_CASE("TC model: a collision within the window of the sphere's last one is e
   CHECK(ball_impact_loss_J(0.0, 0.1) > 1.2 * first_loss_J);
   // A window of 10^3 t_c (t_c ≈ 0.6 ms at 0.3 m/s, shorter at lower speed): every later
   // bounce falls within it and is elastic.
-  CHECK(ball_impact_loss_J(1e3, 0.1) == doctest::Approx(first_loss_J).epsilon(1e-9));
+  CHECK(ball_impact_loss_J(1e3, 0.1) == test::relative(first_loss_J).epsilon(1e-9));
   // A window of one t_c holds no bounce of this ball: the TC model changes nothing here.
   CHECK(ball_impact_loss_J(1.0, 0.1) == ball_impact_loss_J(0.0, 0.1));
 }
@@ -141,7 +141,7 @@ TEST_CASE("TC rest: the enduring speed is where a flight of 2v/a lasts the windo
           CAPTURE(a);
           CAPTURE(window);
           const double v = hertz_enduring_speed_m_s(mass_kg, kn, a, window);
-          CHECK(2 * v / a == doctest::Approx(window * hertz_contact_time_s(mass_kg, kn, v)).epsilon(1e-12));
+          CHECK(2 * v / a == test::relative(window * hertz_contact_time_s(mass_kg, kn, v)).epsilon(1e-12));
         }
       }
     }
@@ -204,9 +204,9 @@ TEST_CASE("TC rest: a ball rests at the first bounce that would land again withi
   CHECK(tc.impacts == 2);
   CHECK(tc.rests == 1);
   // Resting, it has lost all it had by impact: m g h, to the ledger's accuracy, as without.
-  CHECK(tc.impact_J == doctest::Approx(plain.mass_kg * 9.81 * 0.005).epsilon(1e-9));
+  CHECK(tc.impact_J == test::relative(plain.mass_kg * 9.81 * 0.005).epsilon(1e-9));
   CHECK(tc.kinetic_J == 0.0);
-  CHECK(plain.impact_J == doctest::Approx(tc.impact_J).epsilon(1e-9));
+  CHECK(plain.impact_J == test::relative(tc.impact_J).epsilon(1e-9));
   // One t_c at 1 g holds none of these bounces (below the rest speed either way): the same bits.
   CHECK(hertz_enduring_speed_m_s(plain.mass_kg, plain.kn_N_m1_5, 9.81, 1.0) < 0.005);
   const DroppedBall one = dropped_ball({.rest_tc_window = 1.0});
@@ -251,7 +251,7 @@ TEST_CASE("TC rest: a rider hit slower than the speed at which it would rest sta
   CHECK(held.knock_offs == 0);
   CHECK(held.rests == 2);
   CHECK(held.kinetic_J == 0.0);
-  CHECK(held.dissipated_J == doctest::Approx(held.expected_J).epsilon(1e-9));
+  CHECK(held.dissipated_J == test::relative(held.expected_J).epsilon(1e-9));
 }
 
 TEST_CASE("resting: a sphere slower than the elastic speed rests, where it would bounce without end") {
@@ -264,7 +264,7 @@ TEST_CASE("resting: a sphere slower than the elastic speed rests, where it would
   CHECK(slow.impacts == 1);
   CHECK(slow.rests == 1);
   CHECK(slow.kinetic_J == 0.0);
-  CHECK(slow.impact_J == doctest::Approx(slow.mass_kg * 9.81 * drop_m).epsilon(1e-9));
+  CHECK(slow.impact_J == test::relative(slow.mass_kg * 9.81 * drop_m).epsilon(1e-9));
   // With resting off it bounces elastically throughout the 0.3 s (about 74 times), losing
   // nothing but round-off.
   const DroppedBall bouncing = dropped_ball({.rest_speed_m_s = 0.0, .elastic_speed_m_s = 0.05}, drop_m);
@@ -277,7 +277,7 @@ TEST_CASE("resting: a sphere slower than the elastic speed rests, where it would
   CHECK(held.knock_offs == 0);
   CHECK(held.rests == 2);
   CHECK(held.kinetic_J == 0.0);
-  CHECK(held.dissipated_J == doctest::Approx(held.expected_J).epsilon(1e-9));
+  CHECK(held.dissipated_J == test::relative(held.expected_J).epsilon(1e-9));
 }
 
 TEST_CASE(

@@ -49,7 +49,7 @@ TEST_CASE("free flight: two spheres closing in get their exact contact time, out
   REQUIRE(contacts.size() == 1);
   CHECK(contacts[0].i == 0);
   CHECK(contacts[0].j == 1);
-  CHECK(contacts[0].t_s == doctest::Approx(0.0004).epsilon(1e-12));
+  CHECK(contacts[0].t_s == test::relative(0.0004).epsilon(1e-12));
   CHECK(of_kind(events, EventKind::host_check).empty());  // the host is out of reach
   CHECK(flight.is_current(contacts[0], 0));
   flight.new_trajectory(1);
@@ -58,7 +58,7 @@ TEST_CASE("free flight: two spheres closing in get their exact contact time, out
   const std::vector<Event> crossings = of_kind(events, EventKind::cell_crossing);
   REQUIRE(crossings.size() == 1);
   CHECK(crossings[0].j == FreeFlight::x_upper);
-  CHECK(crossings[0].t_s == doctest::Approx((flight.grid().x_lower_m(flight.sphere(0).cell.ix + 1) + 0.0004) / 0.2));
+  CHECK(crossings[0].t_s == test::relative((flight.grid().x_lower_m(flight.sphere(0).cell.ix + 1) + 0.0004) / 0.2));
   CHECK(flight.sphere(0).t_cross_s == crossings[0].t_s);
 }
 
@@ -101,12 +101,12 @@ TEST_CASE("free flight: the host check comes when the bed could first be reached
   CHECK_FALSE(flight.predict(0, flight.around(0), 0.0, {0.0, 0.1, 0.0}));
   std::vector<Event> checks = of_kind(test::drain(flight.queue()), EventKind::host_check);
   REQUIRE(checks.size() == 1);
-  CHECK(checks[0].t_s == doctest::Approx(0.01).epsilon(1e-14));
+  CHECK(checks[0].t_s == test::relative(0.01).epsilon(1e-14));
   // A bed 0.4 mm deep is reached sooner; one up to the sphere is within reach now.
   CHECK_FALSE(flight.predict(0, flight.around(0), 0.0, {0.0, 0.1, 0.0004}));
   checks = of_kind(test::drain(flight.queue()), EventKind::host_check);
   REQUIRE(checks.size() == 1);
-  CHECK(checks[0].t_s == doctest::Approx(0.006).epsilon(1e-12));
+  CHECK(checks[0].t_s == test::relative(0.006).epsilon(1e-12));
   CHECK(flight.predict(0, flight.around(0), 0.0, {0.0, 0.1, 0.001}));
   CHECK(of_kind(test::drain(flight.queue()), EventKind::host_check).empty());
 }
@@ -146,7 +146,7 @@ TEST_CASE("free flight: the side wall is predicted where the sphere's cell reach
     const std::vector<Event> events = test::drain(flight.queue());
     const std::vector<Event> walls = of_kind(events, EventKind::side_wall);
     if (!walls.empty()) {
-      CHECK(walls[0].t_s == doctest::Approx(0.0095).epsilon(1e-12));
+      CHECK(walls[0].t_s == test::relative(0.0095).epsilon(1e-12));
       return;
     }
     const std::vector<Event> crossings = of_kind(events, EventKind::cell_crossing);

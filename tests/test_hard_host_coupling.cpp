@@ -133,7 +133,7 @@ TEST_CASE("riders: a sphere comes to rest on the floor of a free host, which tak
   const HostCoupling::Attached attached = parts.host.attach(0, 1, -1, parts.host.now(0.0), 0.0);
   CHECK(parts.host.riding_count() == 1);
   CHECK(parts.flight.sphere(0).riding == 1);
-  CHECK(attached.host_after.v_m_s == doctest::Approx((host_mass * host_v + m * vz) / (host_mass + m)).epsilon(1e-15));
+  CHECK(attached.host_after.v_m_s == test::relative((host_mass * host_v + m * vz) / (host_mass + m)).epsilon(1e-15));
   CHECK(attached.lab_position_m.isApprox(Eigen::Vector3d(0.001, 0.002, z0 + r_m)));
   // The sphere now holds its host-frame position, and no motion of its own.
   CHECK(p.position_m.col(0).isApprox(Eigen::Vector3d(0.001, 0.002, r_m)));
@@ -141,9 +141,9 @@ TEST_CASE("riders: a sphere comes to rest on the floor of a free host, which tak
   CHECK(p.angular_velocity_rad_s.col(0).isZero());
   // The loss: the normal part is impact, the stopped sliding and spin friction.
   const double reduced = m * host_mass / (m + host_mass);
-  CHECK(parts.ledger.impact_J == doctest::Approx(0.5 * reduced * (vz - host_v) * (vz - host_v)).epsilon(1e-14));
+  CHECK(parts.ledger.impact_J == test::relative(0.5 * reduced * (vz - host_v) * (vz - host_v)).epsilon(1e-14));
   CHECK(parts.ledger.friction_J ==
-        doctest::Approx(0.5 * m * (0.01 * 0.01 + 0.02 * 0.02) + 0.5 * 0.4 * m * r_m * r_m * 14.0).epsilon(1e-14));
+        test::relative(0.5 * m * (0.01 * 0.01 + 0.02 * 0.02) + 0.5 * 0.4 * m * r_m * r_m * 14.0).epsilon(1e-14));
   // All of it the sphere's own.
   CHECK(parts.ledger.by_sphere.impact_J[0] == parts.ledger.impact_J);
   CHECK(parts.ledger.by_sphere.friction_J[0] == parts.ledger.friction_J);
@@ -207,9 +207,9 @@ TEST_CASE("riders: with a rest window, a sphere rests below the soft law's endur
   // On a cap: the sphere's own mass against the wall law.
   const double on_floor = hertz_enduring_speed_m_s(m, s.soft_wall.kn_N_m1_5, 3 * g, 50);
   REQUIRE(on_floor > 10 * rest);
-  CHECK(rest_speed(0, -1, 1.0, three_quarters) == doctest::Approx(on_floor).epsilon(1e-12));
+  CHECK(rest_speed(0, -1, 1.0, three_quarters) == test::relative(on_floor).epsilon(1e-12));
   CHECK(rest_speed(0, -1, -1.0, quarter) ==
-        doctest::Approx(hertz_enduring_speed_m_s(m, s.soft_wall.kn_N_m1_5, g, 50)).epsilon(1e-12));
+        test::relative(hertz_enduring_speed_m_s(m, s.soft_wall.kn_N_m1_5, g, 50)).epsilon(1e-12));
   // Where nothing presses, the rest speed alone.
   CHECK(rest_speed(0, -1, -1.0, three_quarters) == rest);
   CHECK(rest_speed(0, -1, 1.0, quarter) == rest);
@@ -218,7 +218,7 @@ TEST_CASE("riders: with a rest window, a sphere rests below the soft law's endur
   // On a rider: the pair's reduced mass against the sphere law, along the normal's share of the pressing.
   parts.host.attach(0, 1, -1, parts.host.now(0.0), 0.0);
   CHECK(rest_speed(1, 0, 0.6, three_quarters) ==
-        doctest::Approx(hertz_enduring_speed_m_s(0.5 * m, s.soft_particle.kn_N_m1_5, 0.6 * 3 * g, 50)).epsilon(1e-12));
+        test::relative(hertz_enduring_speed_m_s(0.5 * m, s.soft_particle.kn_N_m1_5, 0.6 * 3 * g, 50)).epsilon(1e-12));
   // Without a window, the rest speed whatever presses.
   s.hard_resting.rest_tc_window = 0;
   Parts plain(s, test::spheres({Eigen::Vector3d(0.003, 0, r_m), Eigen::Vector3d(-0.003, 0, 0.005)},
@@ -256,7 +256,7 @@ TEST_CASE(
   parts.host.attach(2, 1, -1, parts.host.now(0.0), 0.0);
   parts.host.attach(3, 1, 2, parts.host.now(0.0), 0.0);
   const Eigen::Vector3d out = p.position_m.col(3) - p.position_m.col(2);
-  CHECK(out.norm() == doctest::Approx(2 * r_m).epsilon(1e-15));
+  CHECK(out.norm() == test::relative(2 * r_m).epsilon(1e-15));
   CHECK(out.norm() - 2 * r_m > -1e-18);
   CHECK(out.normalized().isApprox(slant, 1e-12));
   // One clear of its rider and its cap stays where it is.
@@ -282,7 +282,7 @@ TEST_CASE("riders: the bed's release is predicted when the floor's acceleration 
   CHECK(releases[0].j == 1);
   CHECK(releases[0].count_j == parts.host.epoch());
   // −A ω² sin(ωt) = −g: ωt = π/6.
-  CHECK(releases[0].t_s == doctest::Approx(std::numbers::pi / 6 / w).epsilon(1e-9));
+  CHECK(releases[0].t_s == test::relative(std::numbers::pi / 6 / w).epsilon(1e-9));
 }
 
 TEST_CASE("riders: a rider's departure re-predicts the spheres near it, and on a prescribed host no others") {
@@ -440,16 +440,16 @@ TEST_CASE("books: the host's damping and excitation booked in stretches add up t
   whole.book_host(trajectory, 0.1, none);
   for (int k = 1; k <= 10; ++k) stretches.book_host(trajectory, 0.01 * k, none);
   CHECK(whole.viscous_J > 0.0);
-  CHECK(stretches.viscous_J == doctest::Approx(whole.viscous_J).epsilon(1e-12));
-  CHECK(stretches.excitation_J == doctest::Approx(whole.excitation_J).epsilon(1e-12));
+  CHECK(stretches.viscous_J == test::relative(whole.viscous_J).epsilon(1e-12));
+  CHECK(stretches.excitation_J == test::relative(whole.excitation_J).epsilon(1e-12));
   // An observation adds what the trajectory did since the last booking.
   HardLedger booked(0);
   booked.book_host(trajectory, 0.04, none);
   Observation observed;
   booked.write_to(observed, trajectory, 0.1, none);
-  CHECK(observed.energy.dissipated_viscous_J == doctest::Approx(whole.viscous_J).epsilon(1e-12));
-  CHECK(observed.energy.excitation_work_J == doctest::Approx(whole.excitation_J).epsilon(1e-12));
-  CHECK(observed.host_load.z_m_s == doctest::Approx(whole.load.value().z_m_s).epsilon(1e-12));
+  CHECK(observed.energy.dissipated_viscous_J == test::relative(whole.viscous_J).epsilon(1e-12));
+  CHECK(observed.energy.excitation_work_J == test::relative(whole.excitation_J).epsilon(1e-12));
+  CHECK(observed.host_load.z_m_s == test::relative(whole.load.value().z_m_s).epsilon(1e-12));
 }
 
 TEST_CASE("books: a prescribed host's work on its riders is the change of their energy that moves with it") {
@@ -463,7 +463,7 @@ TEST_CASE("books: a prescribed host's work on its riders is the change of their 
   const HostState a = trajectory.at(0.0), b = trajectory.at(0.007);
   const double expected =
       0.003 * (0.5 * b.v_m_s * b.v_m_s + 9.81 * b.z_m) - 0.003 * (0.5 * a.v_m_s * a.v_m_s + 9.81 * a.z_m);
-  CHECK(ledger.excitation_J == doctest::Approx(expected).epsilon(1e-14));
+  CHECK(ledger.excitation_J == test::relative(expected).epsilon(1e-14));
   CHECK(ledger.viscous_J == 0.0);
 }
 

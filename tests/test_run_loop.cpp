@@ -83,7 +83,7 @@ TEST_CASE("the run loop tells each observation's step, off the grid only at a du
     steps.push_back(step);
     const double t = engine.observe().t_s;
     if (step.on_grid) {
-      CHECK(t == doctest::Approx(static_cast<double>(step.index) * grid.step_s).epsilon(1e-12));
+      CHECK(t == doctest::Approx(static_cast<double>(step.index) * grid.step_s).scale(grid.step_s).epsilon(1e-12));
     } else {
       CHECK(t == s.run.duration_s);
     }

@@ -164,7 +164,7 @@ TEST_CASE("runs, samples and cycles round-trip through the public tables and vie
   CHECK(summary->status == "running");
   CHECK(summary->n_samples == 101);
   CHECK(summary->n_cycles == 1);
-  CHECK(*summary->dissipated_friction_J == doctest::Approx(2.0));
+  CHECK(*summary->dissipated_friction_J == doctest::Approx(2.0).scale(1.0));
   store.finish_run(id, {RunStatus::completed, "", 1.0, 0.5, 0.05, 1e-4});
   summary = store.summary(id);
   CHECK(summary->status == "completed");

@@ -24,6 +24,11 @@
 
 namespace pdamp::test {
 
+/// Approx relative to `value` alone: doctest's default scale of 1 makes comparisons of
+/// quantities far below 1 (joules, metres, seconds of a millimetre sphere) vacuous. Not
+/// for a value that may be exactly 0: doctest's test is strict, so 0 == relative(0) fails.
+inline doctest::Approx relative(double value) { return doctest::Approx(value).scale(0.0); }
+
 inline std::filesystem::path source_dir() { return PDAMP_SOURCE_DIR; }
 inline std::filesystem::path scenario_file(const std::string& name) {
   return source_dir() / "data" / "scenarios" / (name + ".ini");

@@ -284,7 +284,7 @@ TEST_CASE(
     "the dense-bed settings (rest window 10, elastic speed 0.1 m/s): no overlaps, the ledger kept, far fewer "
     "collisions") {
   // docs/hard-engine.md, "Settings for dense beds": on the paper's dense beds they keep the
-  // particles' total within 3 % of the soft model's, 3.8-77x faster than it.
+  // particles' total within 3 % of the soft model's, 3.2-72x faster than it.
   const ScenarioOverrides dense = {"hard.rest_tc_window=10", "hard.elastic_speed_m_s=0.1"};
   struct Outcome {
     std::int64_t collisions;

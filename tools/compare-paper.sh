@@ -10,7 +10,8 @@
 #   - pdamp compare with the hard model's settings for dense beds (docs/hard-engine.md,
 #     "Settings for dense beds") on Table 1, Table 2's first 0.05 s, Table 4 at 20 Hz and
 #     the first 0.2 s of the others.
-# A case that fails is stored as failed and the script goes on. About 11 minutes on one quiet core (2026-12-06).
+# A case that fails is stored as failed and the script goes on. About 8 minutes on one quiet core (2026-12-05),
+# and the dense settings' comparisons 2.2 min more (the sum of their runs, 2026-12-06).
 # Usage: tools/compare-paper.sh [--db FILE] [--threads N]
 set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

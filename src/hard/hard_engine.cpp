@@ -1,5 +1,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -87,8 +88,16 @@ void HardEngine::check_overlaps(double t_s) {
   if (const Overlap overlap = deepest_overlap(); overlap.depth_m > overlap_tolerance_m()) {
     std::ostringstream why;
     why << "hard engine invariant broken at t = " << t_s << " s: " << describe(overlap) << " overlap by "
-        << overlap.depth_m << " m (tolerance " << overlap_tolerance_m()
-        << " m); the engine missed an event, a defect to report";
+        << overlap.depth_m << " m (tolerance " << overlap_tolerance_m() << " m); the engine missed an event";
+    const double across_axis_m_s2 = flight_.gravity_m_s2().head<2>().norm();
+    if (overlap.j < 0 && overlap.wall == Wall::side && across_axis_m_s2 > 0.0) {
+      // A known limitation, not a new defect: tell the user what to run instead.
+      why << ". The hard model cannot rest spheres that gravity presses against the side wall (here "
+          << across_axis_m_s2 << " m/s^2 of it across the cylinder's axis; docs/hard-engine.md, \"Resting beds "
+          << "and inelastic collapse\"): run this scenario with --model soft";
+    } else {
+      why << ", a defect to report";
+    }
     throw RuntimeFailure(why.str());
   }
 }
@@ -184,7 +193,9 @@ std::string HardEngine::describe(const Overlap& overlap) const {
   const auto sphere = [&](int k) {
     return "sphere " + std::to_string(k) + (flight_.sphere(k).riding ? " (riding)" : " (free)");
   };
-  return sphere(overlap.i) + " and " + (overlap.j < 0 ? std::string("the walls") : sphere(overlap.j));
+  if (overlap.j >= 0) return sphere(overlap.i) + " and " + sphere(overlap.j);
+  static constexpr std::array<const char*, 3> walls{"the side wall", "the floor", "the top cap"};
+  return sphere(overlap.i) + " and " + walls[static_cast<std::size_t>(overlap.wall)];
 }
 
 HardEngine::Overlap HardEngine::deepest_overlap() const {
@@ -197,14 +208,16 @@ HardEngine::Overlap HardEngine::deepest_overlap() const {
   CellList cells;
   cells.build(grid, positions);
   Overlap deepest;
-  const auto note = [&](double depth_m, Eigen::Index i, int j) {
-    if (depth_m > deepest.depth_m) deepest = {depth_m, static_cast<int>(i), j};
+  const auto note = [&](double depth_m, Eigen::Index i, int j, Wall wall = Wall::side) {
+    if (depth_m > deepest.depth_m) deepest = {depth_m, static_cast<int>(i), j, wall};
   };
   std::array<int, 27> around{};
   const Cavity& cavity = flight_.cavity();
   for (Eigen::Index i = 0; i < n; ++i) {
     const double r = particles.radius_m[i];
-    note(-cavity.clearance_m(positions.col(i), r, host.z_m), i, -1);
+    for (const Wall wall : {Wall::side, Wall::bottom, Wall::top}) {
+      note(-cavity.gap(wall, positions.col(i), r, host.z_m).gap_m, i, -1, wall);
+    }
     const int count = grid.neighbours(grid.coord_of(positions.col(i)), around);
     for (int c = 0; c < count; ++c) {
       for (const int j : cells.particles_in(around[c])) {

@@ -64,13 +64,14 @@ class HardEngine final : public Engine {
   double max_overlap_m() const { return deepest_overlap().depth_m; }
   /// Overlaps never exceed this (m): the contact tolerance of the root finders plus round-off.
   double overlap_tolerance_m() const { return 10.0 * flight_.contact_tolerance_m(); }
-  /// Where the deepest overlap is: spheres i and j (j −1: i and a wall), how deep (m).
+  /// Where the deepest overlap is: spheres i and j (j −1: i and `wall`), how deep (m).
   struct Overlap {
     double depth_m = 0.0;
     int i = -1, j = -1;
+    Wall wall = Wall::side;
   };
   Overlap deepest_overlap() const;
-  /// "sphere 3 (riding) and the walls", for messages.
+  /// "sphere 3 (riding) and the side wall", for messages.
   std::string describe(const Overlap& overlap) const;
   int riding_count() const { return host_.riding_count(); }
   /// Whether the engine asks for neighbours' records and cells ahead of use: where they

@@ -17,7 +17,6 @@
 #include "pdamp/model/placement.hpp"
 #include "pdamp/sim/run.hpp"
 #include "pdamp/simd/simd_path.hpp"
-#include "pdamp/soft/settling.hpp"
 #include "test_support.hpp"
 
 using namespace pdamp;
@@ -446,26 +445,6 @@ TEST_CASE("jam: a cluster driven against the side wall sticks to the host instea
   const Eigen::Vector3d relative =
       end.particles.velocity_m_s.col(54) - end.observation.host.v_m_s * Eigen::Vector3d::UnitZ();
   CHECK(relative.norm() <= 1e-4 * 3.0);
-}
-
-TEST_CASE("a failure where gravity presses spheres against the side wall names that limitation and the soft model") {
-  // docs/hard-engine.md, "Resting beds and inelastic collapse": the hard model rests spheres
-  // only on caps; gravity across the cylinder's axis presses them against the side wall, and
-  // the small damper's bed, settled against it, so fails (`pdamp run` at t = 0.014 s). That is
-  // known, not a new defect to report.
-  const Scenario s = load_scenario(test::scenario_file("small"), {"gravity.g_m_s2=9.81 0 0"});
-  HardEngine engine(s, soft::settle_bed(s, placed(s)).particles);
-  std::string message;
-  try {
-    engine.advance_to(0.05);
-  } catch (const RuntimeFailure& failure) {
-    message = failure.what();
-  }
-  MESSAGE(message);
-  CHECK(message.find("and the side wall overlap by") != std::string::npos);
-  CHECK(message.find("(here 9.81 m/s^2 of it across the cylinder's axis") != std::string::npos);
-  CHECK(message.find("run this scenario with --model soft") != std::string::npos);
-  CHECK(message.find("a defect to report") == std::string::npos);
 }
 
 TEST_CASE("jam: Table 4's 250 Hz bed, hit by a cap at 15 m/s, gets past the wedges against the side wall") {

@@ -89,17 +89,27 @@ void HardEngine::check_overlaps(double t_s) {
     std::ostringstream why;
     why << "hard engine invariant broken at t = " << t_s << " s: " << describe(overlap) << " overlap by "
         << overlap.depth_m << " m (tolerance " << overlap_tolerance_m() << " m); the engine missed an event";
-    const double across_axis_m_s2 = flight_.gravity_m_s2().head<2>().norm();
-    if (overlap.j < 0 && overlap.wall == Wall::side && across_axis_m_s2 > 0.0) {
-      // A known limitation, not a new defect: tell the user what to run instead.
-      why << ". The hard model cannot rest spheres that gravity presses against the side wall (here "
-          << across_axis_m_s2 << " m/s^2 of it across the cylinder's axis; docs/hard-engine.md, \"Resting beds "
-          << "and inelastic collapse\"): run this scenario with --model soft";
-    } else {
-      why << ", a defect to report";
-    }
+    why << known_cause(overlap);
     throw RuntimeFailure(why.str());
   }
+}
+
+std::string HardEngine::known_cause(const Overlap& overlap) const {
+  // Known limitations (docs/hard-engine.md, "Resting beds and inelastic collapse"), not new
+  // defects: say what to run instead.
+  std::ostringstream why;
+  const double across_axis_m_s2 = flight_.gravity_m_s2().head<2>().norm();
+  if (overlap.j < 0 && overlap.wall == Wall::side && across_axis_m_s2 > 0.0) {
+    why << ". The hard model cannot rest spheres that gravity presses against the side wall (here " << across_axis_m_s2
+        << " m/s^2 of it across the cylinder's axis): run this scenario with --model soft";
+  } else if (!host_.resting_on()) {
+    why << ". Resting is off (hard.rest_speed_m_s = 0 without hard.rest_tc_window): spheres that the host "
+           "presses against its walls keep bouncing on them, where the hard model is known to fail; turn resting on";
+  } else {
+    return ", a defect to report";
+  }
+  why << " (docs/hard-engine.md, \"Resting beds and inelastic collapse\")";
+  return why.str();
 }
 
 void HardEngine::poll() {

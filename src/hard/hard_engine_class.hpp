@@ -73,6 +73,9 @@ class HardEngine final : public Engine {
   Overlap deepest_overlap() const;
   /// "sphere 3 (riding) and the side wall", for messages.
   std::string describe(const Overlap& overlap) const;
+  /// What a failure at `overlap` adds to its message: a known limitation and what to run
+  /// instead, or that it is a defect to report.
+  std::string known_cause(const Overlap& overlap) const;
   int riding_count() const { return host_.riding_count(); }
   /// Whether the engine asks for neighbours' records and cells ahead of use: where they
   /// outgrow half the L2 cache (FreeFlight).

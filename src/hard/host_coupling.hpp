@@ -113,6 +113,8 @@ class HostCoupling {
   /// speed below which the host's pressing acceleration brings it back within that many soft
   /// contact times, if that is faster (hertz_enduring_speed_m_s).
   double rest_speed_m_s(int i, int support, double normal_z_from_support, const HostState& host, double t_s) const;
+  /// Whether spheres rest at all (hard.rest_speed_m_s or hard.rest_tc_window above 0).
+  bool resting_on() const { return rest_speed_m_s_ > 0.0 || rest_tc_window_ > 0.0; }
   /// What attach did.
   struct Attached {
     HostState host_after;            ///< the host's state after the sticking collision
